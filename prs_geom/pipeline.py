@@ -1,0 +1,110 @@
+"""The build pipeline: design -> analysis -> geometry -> checks -> exports.
+
+``build`` runs every stage available on a design and writes all exports plus
+``report.json`` into an output folder atomically (see :mod:`prs_geom.output`).
+Each stage is a function ``stage(ctx)`` that fills its report section and may write files
+into ``ctx.out``; stages run in the order of :data:`STAGES`.
+"""
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from . import __version__
+from .design import PRSDesign
+from .designio import design_to_dict, dumps_toml
+from .output import AtomicOutputDir
+from .progress import ProgressFn, silent
+
+REPORT_NAME = "report.json"
+
+
+@dataclass
+class BuildContext:
+    """What stages share: the design, the temporary output folder, the report, and a
+    cache of intermediate results (so no stage computes another's work twice)."""
+
+    design: PRSDesign
+    out: Path
+    report: dict[str, Any]
+    progress: ProgressFn = silent
+    cache: dict[str, Any] = field(default_factory=dict)
+
+    def write_text(self, name: str, text: str) -> Path:
+        path = self.out / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+        self.report["files"].append(name)
+        return path
+
+    def add_file(self, name: str) -> Path:
+        """Register a file a stage writes itself; returns its path in the output folder."""
+        path = self.out / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.report["files"].append(name)
+        return path
+
+
+def stage_design(ctx: BuildContext) -> None:
+    """Record the resolved design and write it back as ``design.toml``."""
+    ctx.write_text("design.toml", dumps_toml(ctx.design, header=f"resolved design '{ctx.design.name}', "
+                                                                f"written by prs_geom {__version__}"))
+
+
+def stage_pitch(ctx: BuildContext) -> None:
+    """Pitch lists of the three parts (tooth 1 at the loaded end)."""
+    d = ctx.design
+    ctx.report["pitch"] = {
+        "screw_mm": list(d.pitch_list("screw")),
+        "roller_mm": list(d.pitch_list("roller")),
+        "nut_mm": list(d.pitch_list("nut")),
+    }
+
+
+#: Stages in run order: (report name, function).
+STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
+    ("design", stage_design),
+    ("pitch", stage_pitch),
+]
+
+
+def new_report(design: PRSDesign) -> dict[str, Any]:
+    """The report skeleton; see README "report.json" for the schema."""
+    return {
+        "prs_geom_version": __version__,
+        "design": design_to_dict(design),
+        "warnings": design.sizing_warnings(),
+        "contact": None,
+        "loads": None,
+        "pitch": None,
+        "checks": {},
+        "timings_s": {},
+        "files": [],
+    }
+
+
+def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
+               stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None) -> BuildContext:
+    ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress)
+    for name, fn in (STAGES if stages is None else stages):
+        t0 = time.perf_counter()
+        fn(ctx)
+        ctx.report["timings_s"][name] = time.perf_counter() - t0
+        progress(name, 1, 1)
+    return ctx
+
+
+def build(design: PRSDesign, out_dir: str | Path, progress: ProgressFn = silent) -> dict[str, Any]:
+    """Run every stage and write the exports and ``report.json`` to ``out_dir``.
+
+    Written atomically: if any stage fails, ``out_dir`` keeps its previous content.
+    Returns the report dict.
+    """
+    with AtomicOutputDir(out_dir) as tmp:
+        ctx = run_stages(design, tmp, progress)
+        ctx.report["files"].append(REPORT_NAME)
+        (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+    return ctx.report

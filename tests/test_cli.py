@@ -1,0 +1,196 @@
+"""CLI behaviour: exit codes, error messages, atomic output (issue 2)."""
+import io
+import json
+import math
+import subprocess
+import sys
+import tempfile
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from prs_geom import cli, pipeline
+from prs_geom.designio import design_to_dict, toml_string
+from prs_geom.design import default_design
+
+
+def _toml(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        if math.isnan(v):
+            return "nan"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return repr(v)
+    if isinstance(v, str):
+        return toml_string(v)
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml(x) for x in v) + "]"
+    return str(v)
+
+
+def _write(data, path):
+    lines = []
+
+    def emit(tbl, prefix):
+        scal = {k: v for k, v in tbl.items() if not isinstance(v, dict)}
+        if prefix and scal:
+            lines.append(f"[{prefix}]")
+        lines.extend(f"{k} = {_toml(v)}" for k, v in scal.items())
+        for k, v in tbl.items():
+            if isinstance(v, dict):
+                emit(v, f"{prefix}.{k}" if prefix else k)
+
+    emit(data, "")
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def run(argv):
+    err, out = io.StringIO(), io.StringIO()
+    with redirect_stderr(err), redirect_stdout(out):
+        code = cli.main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), st.just(math.inf),
+                         st.just(-math.inf))
+non_positive = st.one_of(st.floats(max_value=0.0, allow_nan=False), not_a_number)
+
+
+def out_of(lo, hi):
+    return st.one_of(st.floats(max_value=lo, exclude_max=True, allow_nan=False),
+                     st.floats(min_value=hi, exclude_min=True, allow_nan=False), not_a_number)
+
+
+def bad_int(lo, hi):
+    return st.one_of(st.integers(max_value=lo - 1), st.integers(min_value=hi + 1),
+                     st.floats(allow_nan=False), st.text(max_size=3), st.booleans())
+
+
+def bad_choice(options):
+    return st.one_of(st.text(max_size=12).filter(lambda s: s not in options), st.integers(), st.booleans())
+
+
+def bad_pitch_list(n=20, p=2.0):
+    return st.one_of(
+        st.lists(st.just(p), max_size=30).filter(lambda l: len(l) != n - 1),
+        st.integers(0, n - 2).flatmap(lambda k: st.floats(-10, 0).map(lambda v: [p] * k + [v] + [p] * (n - 2 - k))),
+        st.integers(0, n - 2).flatmap(lambda k: st.floats(p * 1.021, p * 2).map(lambda v: [p] * k + [v] + [p] * (n - 2 - k))),
+        st.text(max_size=4), st.floats(allow_nan=False),
+    )
+
+
+#: field path -> strategy of values that break that field's own rule
+INVALID = {
+    "name": st.one_of(st.just(""), st.just("a b"), st.just("../up"), st.just("-x"), st.integers()),
+    "thread.pitch_mm": non_positive,
+    "thread.flank_half_angle_deg": out_of(10.0, 80.0),
+    "thread.hand": bad_choice(("right", "left")),
+    "thread.engaged_teeth": bad_int(2, 500),
+    "screw.pitch_diameter_mm": non_positive,
+    "screw.starts": bad_int(1, 20),
+    "screw.major_diameter_mm": non_positive,
+    "screw.minor_diameter_mm": non_positive,
+    "screw.length_mm": st.one_of(non_positive, st.floats(0.01, 39.9)),
+    "roller.pitch_diameter_mm": non_positive,
+    "roller.count": bad_int(1, 60),
+    "roller.arc_radius_mm": st.one_of(non_positive, st.floats(0.01, 4.3)),
+    "roller.major_diameter_mm": non_positive,
+    "roller.minor_diameter_mm": non_positive,
+    "roller.pitch_list_mm": bad_pitch_list(),
+    "nut.pitch_diameter_mm": non_positive,
+    "nut.starts": bad_int(1, 20),
+    "nut.outer_diameter_mm": st.one_of(non_positive, st.floats(0.01, 40.8)),
+    "nut.major_diameter_mm": non_positive,
+    "nut.minor_diameter_mm": non_positive,
+    "nut.pitch_list_mm": bad_pitch_list(),
+    **{f"materials.{part}.youngs_modulus_mpa": non_positive for part in ("screw", "roller", "nut")},
+    **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.4999999) for part in ("screw", "roller", "nut")},
+    "loading.axial_load_n": non_positive,
+    "loading.installation": bad_choice(("tension-compression", "compression-compression")),
+    "contact.clearance_mm": out_of(0.0, 0.1),
+    "contact.precision_mm": out_of(1e-13, 1e-4),
+    "mesh.chord_tolerance_mm": out_of(1e-4, 0.1),
+}
+
+
+def test_every_design_field_has_an_invalid_case():
+    """The table above covers every leaf of the design (so no field escapes the test)."""
+    leaves = set()
+
+    def walk(d, prefix):
+        for k, v in d.items():
+            path = f"{prefix}.{k}" if prefix else k
+            walk(v, path) if isinstance(v, dict) else leaves.add(path)
+
+    walk(design_to_dict(default_design()), "")
+    leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
+    assert leaves == set(INVALID)
+
+
+@pytest.mark.parametrize("field", sorted(INVALID))
+@settings(max_examples=8)
+@given(data=st.data())
+def test_invalid_field_gives_exit_2_naming_field_and_no_output(field, data):
+    value = data.draw(INVALID[field], label=field)
+    doc = {}
+    node = doc
+    parts = field.split(".")
+    for p in parts[:-1]:
+        node = node.setdefault(p, {})
+    node[parts[-1]] = value
+    with tempfile.TemporaryDirectory() as tmp:
+        f = Path(tmp) / "bad.toml"
+        _write(doc, f)
+        out = Path(tmp) / "out"
+        code, stdout, stderr = run(["build", str(f), "--out", str(out), "--quiet"])
+        assert code == 2, stderr
+        assert stderr.startswith(f"error: {field}"), stderr
+        assert "Traceback" not in stderr
+        assert not out.exists()
+        assert [p.name for p in Path(tmp).iterdir()] == ["bad.toml"]  # no temp folders left
+
+
+def test_console_script_exit_code_and_debug_traceback(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[thread]\npitch_mm = 0\n")
+    exe = [sys.executable, "-m", "prs_geom.cli"]
+    r = subprocess.run(exe + ["build", str(bad), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode == 2
+    assert "thread.pitch_mm = 0" in r.stderr and "must be > 0" in r.stderr
+    assert "Traceback" not in r.stderr
+    r = subprocess.run(exe + ["--debug", "build", str(bad)], capture_output=True, text=True)
+    assert r.returncode != 0 and "Traceback" in r.stderr
+
+
+def test_failing_build_leaves_earlier_output_unchanged(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    assert run(["build", "--out", str(out), "--quiet"])[0] == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert "report.json" in before
+
+    def boom(ctx):
+        ctx.write_text("half-written.txt", "partial")
+        raise RuntimeError("simulated failure in a late stage")
+
+    monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + [("boom", boom)])
+    with pytest.raises(RuntimeError):
+        run(["build", "--out", str(out), "--quiet"])
+    after = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert after == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_help_of_every_subcommand():
+    for name in ("init", "build", "contact", "loads", "design-pitch", "check", "harmonic"):
+        code, out, _ = run([name, "--help"])
+        assert code == 0 and "usage: prs-geom " + name in out
+
+
+def test_unknown_subcommand_is_usage_error():
+    code, _, err = run(["frobnicate"])
+    assert code == 2 and "invalid choice" in err

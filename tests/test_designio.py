@@ -1,0 +1,73 @@
+import json
+import subprocess
+import sys
+
+import pytest
+from hypothesis import given, settings
+
+from prs_geom.design import PRSDesign, Roller, default_design
+from prs_geom.designio import (design_from_dict, design_to_dict, dumps_json, dumps_toml,
+                               load_design, loads_json, loads_toml, save_design)
+from prs_geom.errors import DesignError
+from strategies import standard_designs
+
+
+def test_default_round_trips_through_toml_and_json(tmp_path):
+    d = default_design()
+    assert loads_toml(dumps_toml(d)) == d
+    assert loads_json(dumps_json(d)) == d
+    for name in ("d.toml", "d.json"):
+        save_design(d, tmp_path / name)
+        assert load_design(tmp_path / name) == d
+
+
+@settings(max_examples=60)
+@given(standard_designs(pitch_lists=True))
+def test_sampled_designs_round_trip_bit_for_bit(d):
+    back = loads_toml(dumps_toml(d))
+    assert back == d
+    # equality of floats is exact: compare the bit patterns of the pitch lists too
+    assert [x.hex() for x in back.roller.pitch_list_mm] == [x.hex() for x in d.roller.pitch_list_mm]
+    assert loads_json(dumps_json(d)) == d
+
+
+def test_empty_file_is_the_default_design():
+    assert loads_toml("") == default_design()
+    assert loads_toml('name = "x"\n[roller]\ncount = 8\n') == PRSDesign(name="x", roller=Roller(count=8))
+
+
+def test_init_then_build_round_trips(tmp_path):
+    """prs-geom init > d.toml && prs-geom build d.toml --out X (DONE-WHEN of issue 2)."""
+    exe = [sys.executable, "-m", "prs_geom.cli"]
+    toml_text = subprocess.run(exe + ["init"], check=True, capture_output=True, text=True).stdout
+    (tmp_path / "d.toml").write_text(toml_text)
+    assert "# axial pitch p (mm)" in toml_text  # commented
+    loaded = load_design(tmp_path / "d.toml")
+    assert loaded == default_design()
+    out = tmp_path / "x"
+    subprocess.run(exe + ["build", str(tmp_path / "d.toml"), "--out", str(out), "--quiet"], check=True)
+    report = json.loads((out / "report.json").read_text())
+    assert design_from_dict(report["design"]) == loaded
+    assert load_design(out / "design.toml") == loaded
+    for key in ("prs_geom_version", "design", "contact", "loads", "pitch", "checks", "timings_s"):
+        assert key in report
+    assert report["pitch"]["roller_mm"] == [2.0] * 19
+
+
+@pytest.mark.parametrize("text, field", [
+    ("[thread]\npitch_mm = -1\n", "thread.pitch_mm"),
+    ("[materials.nut]\npoisson_ratio = 0.7\n", "materials.nut.poisson_ratio"),
+    ("[roller]\ncolour = 3\n", "roller.colour"),
+    ("thread = 3\n", "thread"),
+    ("[thread\n", "<file>"),
+])
+def test_errors_name_the_dotted_field(text, field):
+    with pytest.raises(DesignError) as exc:
+        loads_toml(text)
+    assert exc.value.field == field
+
+
+def test_dict_form_omits_absent_pitch_lists():
+    data = design_to_dict(default_design())
+    assert "pitch_list_mm" not in data["roller"]
+    assert data["materials"]["screw"]["youngs_modulus_mpa"] == 212000.0
