@@ -13,7 +13,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from . import __version__
+from .assembly import carrier_angles, roller_spin
 from .design import PRSDesign
 from .designio import design_to_dict, dumps_toml
 from .output import AtomicOutputDir
@@ -64,10 +67,40 @@ def stage_pitch(ctx: BuildContext) -> None:
     }
 
 
+def stage_meshes(ctx: BuildContext) -> None:
+    """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
+    from .assembly import SIMPLIFIED_PARTS, build_assembly, thread_length
+    from .exports import export_meshes
+    from .mesh import analytic_thread_volume, mesh_report
+
+    d = ctx.design
+    asm = build_assembly(d, progress=ctx.progress)
+    ctx.cache["assembly"] = asm
+    rows = []
+    lengths = {"screw": d.screw.length_mm, "roller": thread_length(d), "nut": thread_length(d)}
+    for i, (name, tm) in enumerate(asm.parts.items()):
+        graded = not tm.warp.is_identity
+        vol = None if graded else analytic_thread_volume(
+            tm.profile, lengths[name], tm.body_radius)
+        rows.append(mesh_report(tm, vol))
+        ctx.progress("mesh checks", i + 1, len(asm.parts))
+    ctx.report["checks"]["meshes"] = rows
+    ctx.report["assembly"] = {
+        "parts": list(asm.placed),
+        "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
+        "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
+        "simplified": SIMPLIFIED_PARTS,
+        "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
+    }
+    for name, text in export_meshes(asm, ctx.out).items():
+        ctx.report["files"].append(name)
+
+
 #: Stages in run order: (report name, function).
 STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("design", stage_design),
     ("pitch", stage_pitch),
+    ("meshes", stage_meshes),
 ]
 
 

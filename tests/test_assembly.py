@@ -1,0 +1,99 @@
+"""Assembly placement and phases (issue 3)."""
+import math
+
+import numpy as np
+import pytest
+
+from prs_geom.assembly import (FIRST_MID_PITCHES, build_assembly, carrier_angles, roller_transform)
+from prs_geom.design import PRSDesign, Roller, Thread, default_design
+from prs_geom.mesh import axial_line_crossings
+
+
+def mod_p(x, p):
+    """x reduced to [-p/2, p/2)."""
+    return (np.asarray(x) + 0.5 * p) % p - 0.5 * p
+
+
+def tooth_mid_phase(design, part_first_mid, lead, hand, theta):
+    """Helix coordinate of a tooth mid-plane of the part at angle theta, mod p."""
+    return mod_p(part_first_mid + hand * lead * theta / (2 * math.pi), design.thread.pitch_mm)
+
+
+@pytest.mark.parametrize("hand", ["right", "left"])
+@pytest.mark.parametrize("count", [10, 7])
+def test_every_roller_sits_in_screw_and_nut_grooves(hand, count):
+    d = PRSDesign(thread=Thread(hand=hand), roller=Roller(count=count))
+    h = d.thread.hand_sign
+    p = d.thread.pitch_mm
+    a = d.centre_distance_mm
+    rs, rr = 0.5 * d.screw.pitch_diameter_mm, 0.5 * d.roller.pitch_diameter_mm
+    for k, psi in enumerate(carrier_angles(d)):
+        T = roller_transform(d, k)
+        assert np.allclose(T[:3, 3], [a * math.cos(psi), a * math.sin(psi), 0.0], atol=1e-12)
+        Tinv = np.linalg.inv(T)
+        for radius, part, groove_offset in ((rs, "screw", 0.5 * p), (a + rr, "nut", 0.5 * p)):
+            P = np.array([radius * math.cos(psi), radius * math.sin(psi), 0.0, 1.0])
+            local = Tinv @ P
+            th_r = math.atan2(local[1], local[0])
+            roller_mid = tooth_mid_phase(d, FIRST_MID_PITCHES["roller"] * p, p, h, th_r)
+            lead = (d.screw.starts if part == "screw" else d.nut.starts) * p
+            groove_mid = tooth_mid_phase(d, FIRST_MID_PITCHES[part] * p + groove_offset, lead, h, psi)
+            assert abs(mod_p(roller_mid - groove_mid, p)) < 1e-12, (k, part)
+
+
+def test_nut_groove_is_half_pitch_from_screw_groove_at_psi_0():
+    d = default_design()
+    p = d.thread.pitch_mm
+    screw_groove = FIRST_MID_PITCHES["screw"] * p + 0.5 * p
+    nut_groove = FIRST_MID_PITCHES["nut"] * p + 0.5 * p
+    assert abs(abs(mod_p(nut_groove - screw_groove, p)) - 0.5 * p) < 1e-15
+
+
+def test_meshed_rollers_interleave_with_screw_on_line_of_centres():
+    """Read flanks off the placed meshes where roller k faces the screw: every roller tooth
+    lies in a screw groove, mid-plane to mid-plane within the chordal tolerance."""
+    d = default_design()
+    tol = 0.01
+    asm = build_assembly(d, tol=tol, gears=False)
+    p = d.thread.pitch_mm
+    rs = 0.5 * d.screw.pitch_diameter_mm
+    screw = asm.placed_mesh("screw")
+    for k, psi in enumerate(carrier_angles(d)):
+        x, y = rs * math.cos(psi), rs * math.sin(psi)
+        roller = asm.placed_mesh(f"roller_{k}")
+        roller_mids = tooth_mids(roller, x, y)
+        screw_grooves = tooth_mids(screw, x, y) + 0.5 * p
+        assert len(roller_mids) >= 19
+        offs = mod_p(roller_mids[:, None] - screw_grooves[None, :], p)
+        assert np.abs(offs).min(axis=1).max() < tol, k
+
+
+def tooth_mids(mesh, x, y):
+    """Mid-planes of the whole teeth crossed by the axial line at (x, y): pairs of an
+    entering (-1) and the next leaving (+1) crossing, end faces excluded."""
+    z, sgn = axial_line_crossings(mesh.vertices, mesh.faces, x, y, with_direction=True)
+    zmin, zmax = mesh.vertices[:, 2].min(), mesh.vertices[:, 2].max()
+    inner = (z > zmin + 1e-9) & (z < zmax - 1e-9)
+    z, sgn = z[inner], sgn[inner]
+    start = np.nonzero((sgn[:-1] < 0) & (sgn[1:] > 0))[0]
+    return 0.5 * (z[start] + z[start + 1])
+
+
+def test_scene_names_and_simplified_parts():
+    d = PRSDesign(roller=Roller(count=4))
+    asm = build_assembly(d, tol=0.02)
+    names = set(asm.placed)
+    assert {"screw", "nut", "roller_0", "roller_3", "roller_3_gear_lo", "nut_ring_gear_hi"} <= names
+    kinds = {n: kind for n, (_, _, kind) in asm.placed.items()}
+    assert kinds["roller_0_gear_lo"] == "simplified" and kinds["roller_0"] == "thread"
+    for n, (mesh, _, _) in asm.placed.items():
+        assert mesh.is_watertight, n
+    assert asm.rigid_body("roller_2_gear_hi") == "roller_2"
+    assert asm.rigid_body("nut_ring_gear_lo") == "nut"
+    V, F = asm.combined_arrays()
+    assert len(F) == sum(len(m.faces) for m, _, _ in asm.placed.values())
+    # combined arrays equal the per-part transformed meshes
+    m3 = asm.placed_mesh("roller_3")
+    start = sum(len(asm.placed[n][0].vertices) for n in ("screw", "nut"))
+    assert V.shape[1] == 3 and np.isfinite(V).all()
+    assert np.min(np.linalg.norm(V - m3.vertices[0], axis=1)) < 1e-12

@@ -1,0 +1,59 @@
+"""Mesh exports read back (issue 3)."""
+import json
+
+import numpy as np
+import pytest
+import trimesh
+
+from prs_geom.design import PRSDesign, Roller, MeshSettings
+from prs_geom.pipeline import build
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("b") / "out"
+    d = PRSDesign(name="exp", roller=Roller(count=5), mesh=MeshSettings(chord_tolerance_mm=0.02))
+    report = build(d, out)
+    return d, out, report
+
+
+def test_stl_files_read_back_to_the_reported_meshes(built):
+    d, out, report = built
+    rows = {r["part"]: r for r in report["checks"]["meshes"]}
+    for part in ("screw", "roller", "nut"):
+        m = trimesh.load(out / f"{part}.stl")
+        assert len(m.faces) == rows[part]["triangles"]
+        assert m.is_watertight
+        assert m.volume == pytest.approx(rows[part]["volume_mm3"], rel=1e-6)
+        assert rows[part]["float32_rounding_mm"] < 5e-6
+    asm = trimesh.load(out / "assembly.stl")
+    assert len(asm.faces) == report["assembly"]["triangles"]
+
+
+def test_glb_scene_has_named_parts(built):
+    d, out, report = built
+    scene = trimesh.load(out / "assembly.glb")
+    assert isinstance(scene, trimesh.Scene)
+    names = set(scene.graph.nodes_geometry)
+    assert set(report["assembly"]["parts"]) == names
+    # roller 3 placed at its carrier angle: its bounding box centre at the centre distance
+    T, geom = scene.graph["roller_3"]
+    assert np.hypot(T[0, 3], T[1, 3]) == pytest.approx(d.centre_distance_mm, abs=1e-5)
+
+
+def test_report_mesh_section(built):
+    d, out, report = built
+    on_disk = json.loads((out / "report.json").read_text())
+    assert on_disk["checks"]["meshes"] == report["checks"]["meshes"]
+    for row in report["checks"]["meshes"]:
+        assert set(row) >= {"part", "triangles", "watertight", "manifold", "chord_tolerance_mm",
+                            "max_deviation_mm"}
+        assert row["watertight"] and row["manifold"]
+        assert row["chord_tolerance_mm"] == 0.02
+        assert 0 < row["max_deviation_mm"] <= 0.02
+    assert "roller_gear" in report["assembly"]["simplified"]
+    assert report["assembly"]["roller_carrier_angles_deg"] == pytest.approx([0, 72, 144, 216, 288])
+    assert set(report["files"]) >= {"screw.stl", "roller.stl", "nut.stl", "assembly.stl", "assembly.glb",
+                                    "report.json", "design.toml"}
+    for f in report["files"]:
+        assert (out / f).is_file()
