@@ -103,6 +103,13 @@ class PitchWarp:
             return np.zeros_like(m)
         return self._eval(m, 1)
 
+    def correction_curvature(self, m: ArrayLike) -> NDArray[np.float64]:
+        """d2c/dm2 (1/mm); zero outside the knot range (linear continuation)."""
+        m = np.asarray(m, dtype=np.float64)
+        if self.is_identity:
+            return np.zeros_like(m)
+        return self._eval(m, 2)
+
     def _eval(self, m: NDArray[np.float64], nu: int) -> NDArray[np.float64]:
         f = self._interp()
         k = self.knots
@@ -114,8 +121,10 @@ class PitchWarp:
         if nu == 0:
             val = np.where(m < lo, c[0] + s_lo * (m - lo), val)
             val = np.where(m > hi, c[-1] + s_hi * (m - hi), val)
-        else:
+        elif nu == 1:
             val = np.where(m < lo, s_lo, np.where(m > hi, s_hi, val))
+        else:
+            val = np.where((m < lo) | (m > hi), 0.0, val)
         return np.asarray(val, dtype=np.float64)
 
     def __call__(self, m: ArrayLike) -> NDArray[np.float64]:

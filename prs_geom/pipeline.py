@@ -96,11 +96,32 @@ def stage_meshes(ctx: BuildContext) -> None:
         ctx.report["files"].append(name)
 
 
+def stage_contact(ctx: BuildContext) -> None:
+    """Analytic contact points and the theoretical screw pitch diameter."""
+    from .contact import contact_report
+
+    ctx.report["contact"] = contact_report(ctx.design)
+
+
+def stage_checks(ctx: BuildContext) -> None:
+    """FCL verification of the contacts and the interference check (both screws)."""
+    from .fcl_verify import verify_contacts
+    from .interference import interference
+
+    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design)
+    ctx.progress("fcl verification", 1, 1)
+    corrected = interference(ctx.design, "corrected", progress=ctx.progress)
+    corrected["nominal_screw"] = interference(ctx.design, "nominal", progress=ctx.progress)
+    ctx.report["checks"]["interference"] = corrected
+
+
 #: Stages in run order: (report name, function).
 STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("design", stage_design),
     ("pitch", stage_pitch),
+    ("contact", stage_contact),
     ("meshes", stage_meshes),
+    ("checks", stage_checks),
 ]
 
 

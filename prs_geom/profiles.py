@@ -65,6 +65,11 @@ class ThreadProfile:
         r_T (mm) for the roller arc flank; ignored for straight flanks.
     hand_sign : int
         +1 right hand, -1 left hand.
+    lead_radius : float, optional
+        Radius (mm) at which the lead angle of the normal-section convention is taken;
+        the pitch radius when omitted. The contact analysis corrects the screw's pitch
+        radius while keeping its lead angle at the nominal radius (so the correction is a
+        pure axial shift of the flanks and the contact point does not move).
     """
 
     part: str
@@ -78,6 +83,7 @@ class ThreadProfile:
     flank: str = FLANK_STRAIGHT
     arc_radius: float = math.nan
     hand_sign: int = 1
+    lead_radius: float | None = None
 
     # -- lead ----------------------------------------------------------------
     @property
@@ -92,8 +98,9 @@ class ThreadProfile:
 
     @property
     def lead_angle(self) -> float:
-        """Lead angle lambda = atan(L / 2 pi r) at the pitch radius (rad), unsigned."""
-        return math.atan(self.lead / (2.0 * math.pi * self.pitch_radius))
+        """Lead angle lambda = atan(L / 2 pi r) at the pitch (or lead) radius (rad), unsigned."""
+        r = self.pitch_radius if self.lead_radius is None else self.lead_radius
+        return math.atan(self.lead / (2.0 * math.pi * r))
 
     @property
     def cos_lead(self) -> float:
@@ -130,6 +137,14 @@ class ThreadProfile:
         if self.flank == FLANK_ARC:
             return -r / np.sqrt(self.arc_radius ** 2 - r * r) / c
         return np.full_like(r, (tb if self.internal else -tb) / c)
+
+    def tooth_half_width_curvature(self, r: ArrayLike) -> NDArray[np.float64]:
+        """d2t/dr2 (1/mm); zero on straight flanks."""
+        r = np.asarray(r, dtype=np.float64)
+        if self.flank == FLANK_ARC:
+            rt2 = self.arc_radius ** 2
+            return -rt2 / (rt2 - r * r) ** 1.5 / self.cos_lead
+        return np.zeros_like(r)
 
     def radius_at_half_width(self, t: ArrayLike) -> NDArray[np.float64]:
         """Inverse of :meth:`tooth_half_width`: radius where the tooth half-width is t."""
