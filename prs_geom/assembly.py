@@ -2,9 +2,10 @@
 
 Part frames (z along the part axis, mm):
 
-* nut: thread from z = 0 (loaded end, tooth 1) to z = n p; a ridge mid-plane lies at
-  z = 0 at theta = 0; nut tooth j (the ridge whose pitch list entry counts) has its
-  mid-plane at z = j p at theta = 0, i.e. on the +z side of roller tooth j.
+* nut: thread from z = 0 (loaded end, tooth 1) to z = n p; nut tooth j (the ridge whose
+  pitch list entries count) has its mid-plane at z = (j - 1) p at theta = 0, on the -z
+  side of roller tooth j: the nut tooth that carries roller tooth j when the load flows
+  toward -z (screw pulled at the loaded end, DOMAIN.md section 4; see prs_geom/loads.py).
 * roller: thread from 0 to n p; tooth j mid-plane at z = (j - 1/2) p at local theta = 0.
 * screw: thread of length ``screw.length_mm`` centred on the nut thread; a tooth mid-plane
   at z = p/2 at theta = 0.
@@ -93,7 +94,7 @@ def part_warps(design: PRSDesign) -> dict[str, PitchWarp]:
     return {
         "screw": identity_warp(p),
         "roller": PitchWarp(0.5 * p, p, design.roller.pitch_list_mm),
-        "nut": PitchWarp(p, p, design.nut.pitch_list_mm),
+        "nut": PitchWarp(0.0, p, design.nut.pitch_list_mm),
     }
 
 

@@ -126,6 +126,100 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_FOUND if rep["found"] else EXIT_OK
 
 
+def cmd_loads(args: argparse.Namespace) -> int:
+    from .loads import loads_report
+
+    design = _load(args.design)
+    _warn(design)
+    if args.load is not None and not (args.load > 0):
+        raise DesignError("--load", args.load, "must be > 0 N")
+    if args.load is not None:
+        from dataclasses import replace
+        design = design.with_changes(loading=replace(design.loading, axial_load_n=args.load))
+    rep = loads_report(design)
+    if args.json:
+        _print_json(rep)
+        return EXIT_OK
+    print(f"design {design.name}: {rep['design_load_N']:.0f} N, {rep['installation']}, "
+          f"{design.roller.count} rollers x {design.thread.engaged_teeth} teeth")
+    print(f"{'tooth':>5} {'LDC nut-roller':>15} {'LDC roller-screw':>17} {'const. nut-roller':>18} "
+          f"{'const. roller-screw':>20}")
+    c = rep["constant_pitch"]
+    for j in range(len(rep["ldc_nut_roller"])):
+        print(f"{j + 1:5d} {rep['ldc_nut_roller'][j]:15.6f} {rep['ldc_roller_screw'][j]:17.6f} "
+              f"{c['ldc_nut_roller'][j]:18.6f} {c['ldc_roller_screw'][j]:20.6f}")
+    print(f"max LDC {rep['max_ldc']:.4f} (constant pitch {c['max_ldc']:.4f}); axial stiffness "
+          f"{rep['axial_stiffness_N_per_um']:.1f} N/um (secant)")
+    for row in rep["off_design"]:
+        print(f"  at {row['load_fraction'] * 100:5.0f} % load: max LDC {row['max_ldc']:.4f}")
+    sens = rep["sensitivity"]
+    print(f"a {sens['pitch_error_um']:g} um error on one pitch changes a coefficient by up to "
+          f"{max(sens['max_ldc_change_roller'], sens['max_ldc_change_nut']):.4f}")
+    return EXIT_OK
+
+
+def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
+    """Target coefficients from .json / .toml ({nut_roller: [...], roller_screw: [...]}) or
+    .csv (columns tooth, nut_roller, roller_screw)."""
+    import csv
+    import json
+    import tomllib
+
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise DesignError("--target", path, f"cannot be read: {exc.strerror}") from None
+    try:
+        if p.suffix.lower() == ".csv":
+            rows = list(csv.DictReader(text.splitlines()))
+            data = {k: [float(r[k]) for r in rows] for k in ("nut_roller", "roller_screw")}
+        elif p.suffix.lower() == ".json":
+            data = json.loads(text)
+        else:
+            data = tomllib.loads(text)
+    except (ValueError, KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
+        raise DesignError("--target", path, f"is not a valid target file: {exc}") from None
+    out = []
+    for key in ("nut_roller", "roller_screw"):
+        v = data.get(key) if isinstance(data, dict) else None
+        if not isinstance(v, list) or len(v) != n or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+            raise DesignError(f"target.{key}", v, f"must be a list of engaged_teeth = {n} numbers")
+        out.append([float(x) for x in v])
+    return out[0], out[1]
+
+
+def cmd_design_pitch(args: argparse.Namespace) -> int:
+    from .designio import dumps_toml
+    from .loads import build_model, design_pitches, forward, with_pitch_lists
+
+    design = _load(args.design)
+    _warn(design)
+    n = design.thread.engaged_teeth
+    t_nr = t_rs = None
+    if args.target != "equal":
+        t_nr, t_rs = _read_target(args.target, n)
+    model = build_model(design)
+    pd = design_pitches(design, t_nr, t_rs, model=model)
+    new = with_pitch_lists(design, pd, name=args.name or f"{design.name}-graded")
+    check = forward(new, model=model)
+    err = max(abs(check.ldc_nr - pd.target_nr).max(), abs(check.ldc_rs - pd.target_rs).max())
+    text = dumps_toml(new, header=(
+        f"Graded pitch lists of '{design.name}' for target '{args.target}' at "
+        f"{design.loading.axial_load_n:g} N ({design.loading.installation}), written by prs-geom "
+        f"design-pitch.\nForward check: largest coefficient error {err:.2e}."))
+    if args.out:
+        out = Path(args.out)
+        tmp = out.with_name(f".{out.name}.tmp")
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(out)
+        print(f"wrote {out}: largest coefficient error of the forward check {err:.2e}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
 def _unavailable(what: str) -> Callable[[argparse.Namespace], int]:
     def run(args: argparse.Namespace) -> int:
         _load(getattr(args, "design", None))
@@ -182,9 +276,27 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=cmd_check)
 
+    p = sub.add_parser("loads", help="load distribution over the thread teeth",
+                       description="Tooth loads (nonlinear Hertz + Yamamoto teeth + bodies) of the "
+                                   "design's pitch lists, coefficients, stiffness, off-design loads.")
+    design_arg(p)
+    p.add_argument("--load", type=float, metavar="N", help="axial load in N instead of the design load")
+    p.add_argument("--json", action="store_true", help="print the report.json 'loads' section")
+    p.set_defaults(func=cmd_loads)
+
+    p = sub.add_parser("design-pitch", help="pitch lists for equal (or target) load sharing",
+                       description="Roller and nut pitch lists that give equal load sharing (every "
+                                   "coefficient 1) or a target distribution at the design load, "
+                                   "written into a new design file ready for build.")
+    design_arg(p)
+    p.add_argument("--target", default="equal", metavar="equal|FILE",
+                   help="'equal' (default) or a .json/.toml file {nut_roller: [...], roller_screw: [...]} "
+                        "or a .csv with columns tooth,nut_roller,roller_screw (n coefficients each, mean 1)")
+    p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout)")
+    p.add_argument("--name", help="name of the new design (default <name>-graded)")
+    p.set_defaults(func=cmd_design_pitch)
+
     for name, text in (
-        ("loads", "load distribution over the thread teeth"),
-        ("design-pitch", "pitch lists for equal (or target) load sharing"),
         ("harmonic", "stepless harmonic friction drive calculator"),
     ):
         p = sub.add_parser(name, help=text, description=text[0].upper() + text[1:] + ".")

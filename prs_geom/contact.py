@@ -252,7 +252,7 @@ def solve_gap_stationary(batch: ContactBatch, xy0: NDArray, theta0: NDArray, phi
         sol = optimize.root(grad_g, xy0[i], method="hybr", tol=1e-14)
         if np.max(np.abs(sol.fun)) > 1e-13:  # polish with Levenberg-Marquardt
             sol = optimize.root(grad_g, sol.x, method="lm", options={"xtol": 1e-15, "ftol": 1e-15})
-        if np.max(np.abs(sol.fun)) > 1e-12:
+        if np.max(np.abs(sol.fun)) > 1e-10:
             raise ConvergenceError(f"gap-function root did not converge: {sol.message} "
                                    f"(|grad g| = {np.max(np.abs(sol.fun)):.3g})")
         r, th, rho, ph, za, zb = zs(sol.x)

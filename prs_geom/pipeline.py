@@ -67,6 +67,33 @@ def stage_pitch(ctx: BuildContext) -> None:
     }
 
 
+def stage_loads(ctx: BuildContext) -> None:
+    """Load distribution, equal-load pitch design, off-design and plots."""
+    from .loads import build_model, design_pitches, forward, loads_report, off_design, with_pitch_lists
+    from .plots import plot_loads
+
+    d = ctx.design
+    model = build_model(d)
+    rep = loads_report(d, model)
+    ctx.report["loads"] = rep
+    graded = d.roller.pitch_list_mm is not None or d.nut.pitch_list_mm is not None
+    equal = design_pitches(d, model=model)
+    ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
+    if graded:
+        shown = {"ldc_nut_roller": rep["ldc_nut_roller"], "ldc_roller_screw": rep["ldc_roller_screw"]}
+        off, label = rep["off_design"], "design pitch lists"
+        pr, pn = np.array(d.pitch_list("roller")), np.array(d.pitch_list("nut"))
+    else:
+        eq = with_pitch_lists(d, equal)
+        r = forward(eq, model=model)
+        shown = {"ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist()}
+        off, label = off_design(eq, model=model), "equal-load pitch design"
+        pr, pn = np.array(equal.roller_mm), np.array(equal.nut_mm)
+    p = d.thread.pitch_mm
+    for f in plot_loads(ctx.out, d.name, rep["constant_pitch"], shown, off, (pr - p) * 1e3, (pn - p) * 1e3, label):
+        ctx.report["files"].append(f)
+
+
 def stage_meshes(ctx: BuildContext) -> None:
     """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
     from .assembly import SIMPLIFIED_PARTS, build_assembly, thread_length
@@ -120,6 +147,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("design", stage_design),
     ("pitch", stage_pitch),
     ("contact", stage_contact),
+    ("loads", stage_loads),
     ("meshes", stage_meshes),
     ("checks", stage_checks),
 ]

@@ -57,3 +57,15 @@ def test_report_mesh_section(built):
                                     "report.json", "design.toml"}
     for f in report["files"]:
         assert (out / f).is_file()
+
+
+def test_load_plots_and_sections(built):
+    d, out, report = built
+    for stem in ("loads_ldc", "pitch_corrections", "off_design"):
+        png = (out / f"{stem}.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 10000
+        assert b"<svg" in (out / f"{stem}.svg").read_bytes()[:500]
+    L = report["loads"]
+    assert len(L["ldc_nut_roller"]) == d.thread.engaged_teeth
+    assert L["max_ldc"] > 1.1 and L["axial_stiffness_N_per_um"] > 0
+    assert len(report["pitch"]["equal_load"]["roller_mm"]) == d.thread.engaged_teeth - 1

@@ -1,0 +1,71 @@
+"""Plots of the load distribution and pitch design (PNG and SVG), matplotlib Agg backend.
+
+Exporter at the edge: takes the numbers from :mod:`prs_geom.loads`, writes files.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def _save(fig, out: Path, stem: str) -> list[str]:
+    names = []
+    for ext in ("png", "svg"):
+        fig.savefig(out / f"{stem}.{ext}", dpi=130, bbox_inches="tight",
+                    metadata={"Date": None} if ext == "svg" else None)
+        names.append(f"{stem}.{ext}")
+    plt.close(fig)
+    return names
+
+
+def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, Any],
+               off: list[dict[str, Any]], roller_corr_um: np.ndarray, nut_corr_um: np.ndarray,
+               designed_label: str) -> list[str]:
+    """Three figures: LDC per tooth (constant vs designed, both sides), pitch corrections
+    per tooth (um), off-design LDC curves. Returns the file names written."""
+    files = []
+    n = len(const["ldc_nut_roller"])
+    teeth = np.arange(1, n + 1)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, key, title in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+        ax.plot(teeth, const[key], "o-", label="constant pitch")
+        ax.plot(teeth, designed[key], "s-", label=designed_label)
+        ax.axhline(1.0, color="0.6", lw=0.8)
+        ax.set_title(f"{title} contacts")
+        ax.set_xlabel("tooth (1 = loaded end)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("load-distribution coefficient f_j / (F0 / n z)")
+    axes[0].legend()
+    fig.suptitle(f"{name}: load distribution at the design load")
+    files += _save(fig, out, "loads_ldc")
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    j = np.arange(1, len(roller_corr_um) + 1)
+    ax.plot(j, roller_corr_um, "o-", label="roller p_r,j - p")
+    ax.plot(j, nut_corr_um, "s-", label="nut p_n,j - p")
+    ax.set_xlabel("pitch index j (between teeth j and j+1)")
+    ax.set_ylabel("pitch correction (um)")
+    ax.set_title(f"{name}: pitch corrections ({designed_label})")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    files += _save(fig, out, "pitch_corrections")
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, key, title in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+        for row in off:
+            ax.plot(teeth, row[key], "-", label=f"{row['load_fraction'] * 100:.0f} % ({row['load_N']:.0f} N)")
+        ax.axhline(1.0, color="0.6", lw=0.8)
+        ax.set_title(f"{title}, design pitches")
+        ax.set_xlabel("tooth (1 = loaded end)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("load-distribution coefficient")
+    axes[0].legend()
+    fig.suptitle(f"{name}: off-design load distribution")
+    files += _save(fig, out, "off_design")
+    return files
