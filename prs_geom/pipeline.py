@@ -142,6 +142,31 @@ def stage_checks(ctx: BuildContext) -> None:
     ctx.report["checks"]["interference"] = corrected
 
 
+def stage_manufacturing(ctx: BuildContext) -> None:
+    """Machining sheets (CSV per part, one XLSX) and the DXF profile drawing."""
+    from .dxf import write_dxf
+    from .machining import machining_sheets
+    from .sheets import sheet_csv, write_xlsx
+
+    sheets = machining_sheets(ctx.design)
+    ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
+    for part, sh in sheets.items():
+        ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
+    write_xlsx(sheets, ctx.add_file("machining.xlsx"))
+    extra = {}
+    if ctx.report.get("contact"):
+        sr = ctx.report["contact"]["screw_roller"]
+        extra["theoretical screw pitch dia. (grind to)"] = f"{sr['theoretical_pitch_diameter_mm']:.6f} mm"
+    write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
+
+
+def stage_html(ctx: BuildContext) -> None:
+    """The self-contained HTML report (needs every earlier section)."""
+    from .html_report import write_html
+
+    write_html(ctx.design, ctx.report, ctx.out, ctx.add_file("report.html"))
+
+
 #: Stages in run order: (report name, function).
 STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("design", stage_design),
@@ -150,6 +175,8 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("loads", stage_loads),
     ("meshes", stage_meshes),
     ("checks", stage_checks),
+    ("manufacturing", stage_manufacturing),
+    ("html", stage_html),
 ]
 
 
@@ -163,6 +190,7 @@ def new_report(design: PRSDesign) -> dict[str, Any]:
         "loads": None,
         "pitch": None,
         "checks": {},
+        "machining": None,
         "timings_s": {},
         "files": [],
     }
