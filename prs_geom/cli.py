@@ -1,8 +1,8 @@
 """Command-line interface ``prs-geom``.
 
 Exit codes: 0 success; 1 the analysis found a problem (e.g. interference) or a solver
-failed; 2 bad input (the message names the field, the value and the rule); 3 a
-subcommand not available in this version. Without ``--debug`` no traceback is shown.
+failed; 2 bad input (the message names the field, the value and the rule). Without
+``--debug`` no traceback is shown.
 """
 from __future__ import annotations
 
@@ -18,25 +18,31 @@ from .designio import dumps_toml, load_design
 from .errors import DesignError, DesignWarning, PRSGeomError
 from .progress import StderrProgress, silent
 
-EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_UNAVAILABLE = 0, 1, 2, 3
+EXIT_OK, EXIT_FOUND, EXIT_INPUT = 0, 1, 2
 
 
 class UsageError(PRSGeomError):
     """Bad command-line usage (exit code 2)."""
 
 
-class Unavailable(PRSGeomError):
-    """A subcommand whose stage is not in this version (exit code 3)."""
-
-
-def _load(path: str | None) -> PRSDesign:
+def _load_any(path: str | None):
+    """A PRS or harmonic design (by the file's ``kind``); the default PRS without a file."""
     if path is None:
         return default_design()
     return load_design(path)
 
 
-def _warn(design: PRSDesign) -> None:
-    for msg in design.sizing_warnings():
+def _load(path: str | None) -> PRSDesign:
+    """A PRS design; a harmonic design file is an input error for the PRS commands."""
+    d = _load_any(path)
+    if not isinstance(d, PRSDesign):
+        raise DesignError("kind", "harmonic", "this command needs a planetary roller screw design "
+                                              "(use 'prs-geom harmonic' or 'prs-geom build')")
+    return d
+
+
+def _warn(design) -> None:
+    for msg in getattr(design, "sizing_warnings", lambda: [])():
         print(f"warning: {msg}", file=sys.stderr)
 
 
@@ -56,7 +62,7 @@ def cmd_init(args: argparse.Namespace) -> int:
 def cmd_build(args: argparse.Namespace) -> int:
     from .pipeline import build
 
-    design = _load(args.design)
+    design = _load_any(args.design)
     _warn(design)
     out = Path(args.out) if args.out else Path("exports") / design.name
     progress = silent if args.quiet else StderrProgress()
@@ -220,11 +226,39 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _unavailable(what: str) -> Callable[[argparse.Namespace], int]:
-    def run(args: argparse.Namespace) -> int:
-        _load(getattr(args, "design", None))
-        raise Unavailable(f"'{what}' is not available in prs_geom {__version__} yet")
-    return run
+def cmd_harmonic(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .harmonic import HarmonicDesign, harmonic_report
+
+    d = HarmonicDesign() if args.design is None else load_design(args.design)
+    if not isinstance(d, HarmonicDesign):
+        raise DesignError("kind", "prs", "'prs-geom harmonic' needs a design file with kind = \"harmonic\"")
+    a = None
+    if args.a:
+        for k, v in enumerate(args.a):
+            if not d.positions.min_mm <= v <= d.positions.max_mm:
+                raise DesignError(f"--a[{k}]", v, f"must lie in positions [{d.positions.min_mm}, "
+                                                  f"{d.positions.max_mm}] mm")
+        a = np.array(args.a, dtype=float)
+    rep = harmonic_report(d, a)
+    if args.json:
+        _print_json(rep)
+        return EXIT_OK
+    print(f"{d.name}: alpha = {rep['alpha_deg']:.4f} deg, a0 = {rep['a0_mm']:.4f} mm, infinite ratio at "
+          f"a = {rep['infinite_ratio_position_mm']:.4f} mm")
+    print(f"{'a mm':>8} {'beta deg':>10} {'phi deg':>9} {'contact r mm':>13} {'cone R mm':>11} "
+          f"{'Delta mm':>10} {'ratio':>10}")
+    for row in rep["table"]:
+        print(f"{row['a_mm']:8.3f} {row['beta_deg']:10.5f} {row['phi_deg']:9.5f} {row['contact_radius_mm']:13.6f} "
+              f"{row['cone_radius_mm']:11.6f} {row['radius_difference_mm']:10.6f} {row['ratio']:10.1f}")
+    print(f"ratio {rep['ratio_min']:.1f} ... {rep['ratio_max']:.1f} over [{d.positions.min_mm}, "
+          f"{d.positions.max_mm}] mm: speed range {rep['speed_range']:.1f}")
+    for t in rep["tolerance"]:
+        print(f"  ratio {t['max_ratio']:.0f} within {t['ratio_error']:.0%}: radii within +-{t['radius_tolerance_um']:.2f} um "
+              f"(bore diameter band {t['diameter_band_um']:.1f} um, "
+              f"{'ISO IT' + str(t['it_grade']) if t['it_grade'] else 'finer than ISO IT1'})")
+    return EXIT_OK
 
 
 # --------------------------------------------------------------------------- parser
@@ -296,12 +330,14 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--name", help="name of the new design (default <name>-graded)")
     p.set_defaults(func=cmd_design_pitch)
 
-    for name, text in (
-        ("harmonic", "stepless harmonic friction drive calculator"),
-    ):
-        p = sub.add_parser(name, help=text, description=text[0].upper() + text[1:] + ".")
-        design_arg(p)
-        p.set_defaults(func=_unavailable(name))
+    p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
+                       description="Ratio of the conical-circular-spline harmonic friction drive "
+                                   "(DOMAIN.md section 6) as a function of the axial position a.")
+    p.add_argument("design", nargs="?", metavar="FILE",
+                   help="harmonic design file (kind = \"harmonic\"); the worked example if omitted")
+    p.add_argument("--a", type=float, nargs="+", metavar="A", help="positions a (mm) to tabulate")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=cmd_harmonic)
     return parser
 
 
@@ -325,9 +361,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_INPUT
-    except Unavailable as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_UNAVAILABLE
     except PRSGeomError as exc:
         if args.debug:
             raise

@@ -217,47 +217,53 @@ def solve_gap_stationary(batch: ContactBatch, xy0: NDArray, theta0: NDArray, phi
     Returns (N, 3): x, y and the axial gap (positive = clearance).
     """
     out = np.empty((batch.n, 3))
-    for i in range(batch.n):
-        sl = slice(i, i + 1)
-        ox, oy, al = batch.ox[i], batch.oy[i], batch.alpha[i]
-
-        def polar(x, y):
-            r = math.hypot(x, y)
-            th = theta0[i] + math.atan2(-x * math.sin(theta0[i]) + y * math.cos(theta0[i]),
-                                        x * math.cos(theta0[i]) + y * math.sin(theta0[i]))
-            lx, ly = x - ox, y - oy
-            rho = math.hypot(lx, ly)
-            ref = phi0[i] + al
-            ph = phi0[i] + math.atan2(-lx * math.sin(ref) + ly * math.cos(ref),
-                                      lx * math.cos(ref) + ly * math.sin(ref))
-            return r, th, rho, ph
-
-        def zs(v):
-            r, th, rho, ph = polar(*v)
-            za = batch.A.z_derivatives(np.array([r]), np.array([th]), batch.m_a[sl], batch.xi_a[sl])
-            zb = batch.B.z_derivatives(np.array([rho]), np.array([ph]), batch.m_b[sl], batch.xi_b[sl])
-            return r, th, rho, ph, za, zb
-
-        def grad_g(v):
-            r, th, rho, ph, za, zb = zs(v)
-            _, Zr, Zt = za[0][0], za[1][0], za[2][0]
-            gxa = Zr * math.cos(th) - Zt * math.sin(th) / r
-            gya = Zr * math.sin(th) + Zt * math.cos(th) / r
-            _, Zr, Zt = zb[0][0], zb[1][0], zb[2][0]
-            a = ph + al
-            gxb = Zr * math.cos(a) - Zt * math.sin(a) / rho
-            gyb = Zr * math.sin(a) + Zt * math.cos(a) / rho
-            return [gxa - gxb, gya - gyb]
-
-        sol = optimize.root(grad_g, xy0[i], method="hybr", tol=1e-14)
-        if np.max(np.abs(sol.fun)) > 1e-13:  # polish with Levenberg-Marquardt
-            sol = optimize.root(grad_g, sol.x, method="lm", options={"xtol": 1e-15, "ftol": 1e-15})
-        if np.max(np.abs(sol.fun)) > 1e-10:
-            raise ConvergenceError(f"gap-function root did not converge: {sol.message} "
-                                   f"(|grad g| = {np.max(np.abs(sol.fun)):.3g})")
-        r, th, rho, ph, za, zb = zs(sol.x)
-        out[i] = (sol.x[0], sol.x[1], batch.xi_b[i] * (za[0][0] - (zb[0][0] + batch.z_offset[i])))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for i in range(batch.n):
+            out[i] = _gap_stationary_one(batch, i, xy0, theta0, phi0)
     return out
+
+
+def _gap_stationary_one(batch: ContactBatch, i: int, xy0: NDArray, theta0: NDArray, phi0: NDArray) -> NDArray:
+    """Stationary point of the axial gap function for contact i (see solve_gap_stationary)."""
+    sl = slice(i, i + 1)
+    ox, oy, al = batch.ox[i], batch.oy[i], batch.alpha[i]
+
+    def polar(x, y):
+        r = math.hypot(x, y)
+        th = theta0[i] + math.atan2(-x * math.sin(theta0[i]) + y * math.cos(theta0[i]),
+                                    x * math.cos(theta0[i]) + y * math.sin(theta0[i]))
+        lx, ly = x - ox, y - oy
+        rho = math.hypot(lx, ly)
+        ref = phi0[i] + al
+        ph = phi0[i] + math.atan2(-lx * math.sin(ref) + ly * math.cos(ref),
+                                  lx * math.cos(ref) + ly * math.sin(ref))
+        return r, th, rho, ph
+
+    def zs(v):
+        r, th, rho, ph = polar(*v)
+        za = batch.A.z_derivatives(np.array([r]), np.array([th]), batch.m_a[sl], batch.xi_a[sl])
+        zb = batch.B.z_derivatives(np.array([rho]), np.array([ph]), batch.m_b[sl], batch.xi_b[sl])
+        return r, th, rho, ph, za, zb
+
+    def grad_g(v):
+        r, th, rho, ph, za, zb = zs(v)
+        _, Zr, Zt = za[0][0], za[1][0], za[2][0]
+        gxa = Zr * math.cos(th) - Zt * math.sin(th) / r
+        gya = Zr * math.sin(th) + Zt * math.cos(th) / r
+        _, Zr, Zt = zb[0][0], zb[1][0], zb[2][0]
+        a = ph + al
+        gxb = Zr * math.cos(a) - Zt * math.sin(a) / rho
+        gyb = Zr * math.sin(a) + Zt * math.cos(a) / rho
+        return [gxa - gxb, gya - gyb]
+
+    sol = optimize.root(grad_g, xy0[i], method="hybr", tol=1e-14)
+    if np.max(np.abs(sol.fun)) > 1e-13:  # polish with Levenberg-Marquardt
+        sol = optimize.root(grad_g, sol.x, method="lm", options={"xtol": 1e-15, "ftol": 1e-15})
+    if np.max(np.abs(sol.fun)) > 1e-10:
+        raise ConvergenceError(f"gap-function root did not converge: {sol.message} "
+                               f"(|grad g| = {np.max(np.abs(sol.fun)):.3g})")
+    r, th, rho, ph, za, zb = zs(sol.x)
+    return np.array([sol.x[0], sol.x[1], batch.xi_b[i] * (za[0][0] - (zb[0][0] + batch.z_offset[i]))])
 
 
 # --------------------------------------------------------------------------- Euclidean

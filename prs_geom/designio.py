@@ -52,6 +52,19 @@ FIELD_COMMENTS: dict[str, str] = {
     "contact.clearance_mm": "axial clearance left at the screw-roller contact by the corrected screw diameter (mm)",
     "contact.precision_mm": "precision of that clearance (mm)",
     "mesh.chord_tolerance_mm": "largest mesh deviation from the analytic surface (mm)",
+    "kind": '"prs" (default) or "harmonic"',
+    "flexspline.neutral_radius_mm": "flexspline neutral-layer radius r0 (mm)",
+    "flexspline.length_mm": "flexspline length L from the bottom (mm)",
+    "flexspline.arc_radius_mm": "contact arc radius r_s (mm)",
+    "flexspline.arc_centre_offset_mm": "arc centre offset c_s inside the neutral layer (mm)",
+    "flexspline.wall_thickness_mm": "cup wall thickness for the mesh (mm)",
+    "circular_spline.bore_small_radius_mm": "cone bore radius b1 at the small end (mm)",
+    "circular_spline.bore_large_radius_mm": "cone bore radius b2 at the big end (mm)",
+    "circular_spline.bore_length_mm": "cone bore length H (mm)",
+    "circular_spline.outer_radius_mm": "outer radius of the circular spline ring (mm)",
+    "positions.min_mm": "smallest position a of the cone small end from the flexspline bottom (mm)",
+    "positions.max_mm": "largest position a (mm), below the infinite-ratio position",
+    "positions.drawing_mm": "positions a drawn in the DXF (mm)",
 }
 
 
@@ -95,8 +108,11 @@ def _build(cls: type, data: Any, path: str) -> Any:
 def _nested_type(cls: type, key: str) -> type | None:
     """The dataclass type of a section, or None for a plain value."""
     from .design import ContactSettings, Loading, Material, MeshSettings, Nut, Roller, Screw, Thread
+    from .harmonic import CircularSpline, Flexspline, HarmonicDesign, HarmonicMesh, Positions
 
     table = {
+        HarmonicDesign: {"flexspline": Flexspline, "circular_spline": CircularSpline,
+                         "positions": Positions, "mesh": HarmonicMesh},
         PRSDesign: {"thread": Thread, "screw": Screw, "roller": Roller, "nut": Nut,
                     "materials": Materials, "loading": Loading, "contact": ContactSettings,
                     "mesh": MeshSettings},
@@ -105,8 +121,23 @@ def _nested_type(cls: type, key: str) -> type | None:
     return table.get(cls, {}).get(key)
 
 
-def design_from_dict(data: dict[str, Any]) -> PRSDesign:
-    """Validate a nested dict into a :class:`PRSDesign` (errors name the dotted field)."""
+#: Top-level ``kind`` of a design file: a PRS (default) or a harmonic friction drive.
+KINDS = ("prs", "harmonic")
+
+
+def design_from_dict(data: dict[str, Any]):
+    """Validate a nested dict into a :class:`PRSDesign`, or a
+    :class:`~prs_geom.harmonic.HarmonicDesign` when ``kind = "harmonic"`` (errors name the
+    dotted field)."""
+    from .harmonic import HarmonicDesign
+
+    if isinstance(data, dict) and "kind" in data:
+        data = dict(data)
+        kind = data.pop("kind")
+        if kind not in KINDS:
+            raise DesignError("kind", kind, "must be one of " + ", ".join(repr(k) for k in KINDS))
+        if kind == "harmonic":
+            return _build(HarmonicDesign, data, "")
     return _build(PRSDesign, data, "")
 
 
@@ -140,9 +171,13 @@ def _toml_value(v: Any) -> str:
     raise TypeError(f"cannot write {type(v).__name__} to TOML")
 
 
-def dumps_toml(design: PRSDesign, comments: bool = True, header: str | None = None) -> str:
+def dumps_toml(design, comments: bool = True, header: str | None = None) -> str:
     """TOML text of a design that :func:`loads_toml` reads back to an equal object."""
+    from .harmonic import HarmonicDesign
+
     data = design_to_dict(design)
+    if isinstance(design, HarmonicDesign):
+        data = {"kind": "harmonic", **data}
     lines: list[str] = []
     if header:
         lines += [f"# {h}" if h else "#" for h in header.splitlines()] + [""]
@@ -176,8 +211,13 @@ def loads_toml(text: str) -> PRSDesign:
 
 
 # --------------------------------------------------------------------------- JSON
-def dumps_json(design: PRSDesign) -> str:
-    return json.dumps(design_to_dict(design), indent=2) + "\n"
+def dumps_json(design) -> str:
+    from .harmonic import HarmonicDesign
+
+    data = design_to_dict(design)
+    if isinstance(design, HarmonicDesign):
+        data = {"kind": "harmonic", **data}
+    return json.dumps(data, indent=2) + "\n"
 
 
 def loads_json(text: str) -> PRSDesign:

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+import trimesh
 
 from . import __version__
 from .assembly import carrier_angles, roller_spin
@@ -52,7 +53,7 @@ class BuildContext:
 
 
 def stage_design(ctx: BuildContext) -> None:
-    """Record the resolved design and write it back as ``design.toml``."""
+    """Write the resolved design back as ``design.toml``."""
     ctx.write_text("design.toml", dumps_toml(ctx.design, header=f"resolved design '{ctx.design.name}', "
                                                                 f"written by prs_geom {__version__}"))
 
@@ -180,8 +181,13 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
 ]
 
 
-def new_report(design: PRSDesign) -> dict[str, Any]:
+def new_report(design) -> dict[str, Any]:
     """The report skeleton; see README "report.json" for the schema."""
+    from .harmonic import HarmonicDesign
+
+    if isinstance(design, HarmonicDesign):
+        return {"prs_geom_version": __version__, "kind": "harmonic", "design": design_to_dict(design),
+                "warnings": [], "harmonic": None, "checks": {}, "timings_s": {}, "files": []}
     return {
         "prs_geom_version": __version__,
         "design": design_to_dict(design),
@@ -207,14 +213,43 @@ def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
     return ctx
 
 
-def build(design: PRSDesign, out_dir: str | Path, progress: ProgressFn = silent) -> dict[str, Any]:
+def harmonic_stage(ctx: BuildContext) -> None:
+    """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
+    from .harmonic import harmonic_report
+    from .harmonic_exports import (circular_spline_mesh, flexspline_mesh, plot_ratio, ratio_table_csv,
+                                   write_dxf)
+
+    d = ctx.design
+    rep = harmonic_report(d)
+    ctx.report["harmonic"] = rep
+    ctx.write_text("ratio_table.csv", ratio_table_csv(rep["table"]))
+    ctx.report["files"] += plot_ratio(d, ctx.out)
+    write_dxf(d, ctx.add_file("axial_sections.dxf"))
+    rows = []
+    for name, mesh in (("circular_spline", circular_spline_mesh(d)), ("flexspline", flexspline_mesh(d))):
+        ctx.add_file(f"{name}.stl").write_bytes(trimesh.exchange.stl.export_stl(mesh))
+        rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
+                     "volume_mm3": float(mesh.volume), "chord_tolerance_mm": d.mesh.chord_tolerance_mm})
+    ctx.report["checks"]["meshes"] = rows
+
+
+HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
+    ("design", stage_design),
+    ("harmonic", harmonic_stage),
+]
+
+
+def build(design, out_dir: str | Path, progress: ProgressFn = silent) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``.
 
     Written atomically: if any stage fails, ``out_dir`` keeps its previous content.
     Returns the report dict.
     """
+    from .harmonic import HarmonicDesign
+
+    harmonic = isinstance(design, HarmonicDesign)
     with AtomicOutputDir(out_dir) as tmp:
-        ctx = run_stages(design, tmp, progress)
+        ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None)
         ctx.report["files"].append(REPORT_NAME)
         (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
     return ctx.report

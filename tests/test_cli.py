@@ -61,9 +61,10 @@ not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), 
 non_positive = st.one_of(st.floats(max_value=0.0, allow_nan=False), not_a_number)
 
 
-def out_of(lo, hi):
+def out_of(lo, hi, hi_open=False):
+    """Values outside [lo, hi] (outside [lo, hi) when hi_open: hi itself is invalid)."""
     return st.one_of(st.floats(max_value=lo, exclude_max=True, allow_nan=False),
-                     st.floats(min_value=hi, exclude_min=True, allow_nan=False), not_a_number)
+                     st.floats(min_value=hi, exclude_min=not hi_open, allow_nan=False), not_a_number)
 
 
 def bad_int(lo, hi):
@@ -109,7 +110,7 @@ INVALID = {
     "nut.minor_diameter_mm": non_positive,
     "nut.pitch_list_mm": bad_pitch_list(),
     **{f"materials.{part}.youngs_modulus_mpa": non_positive for part in ("screw", "roller", "nut")},
-    **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.4999999) for part in ("screw", "roller", "nut")},
+    **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.5, hi_open=True) for part in ("screw", "roller", "nut")},
     "loading.axial_load_n": non_positive,
     "loading.installation": bad_choice(("tension-compression", "compression-compression")),
     "contact.clearance_mm": out_of(0.0, 0.1),

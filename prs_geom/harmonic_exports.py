@@ -1,0 +1,137 @@
+"""Exports of the harmonic friction drive: ratio plot, CSV table, DXF axial section at
+chosen positions, STL meshes of the cone-bored circular spline and the flexspline cup.
+
+Meshes are solids of revolution of the undeformed parts (each in its own frame, z along
+the axis, mm): the circular spline is a ring whose bore is the cone (radius b1 at z = 0 to
+b2 at z = H); the flexspline is a cup (bottom at z = 0) of wall thickness t about the
+neutral radius with, at its open end, the contact bulge: the arc of radius r_s centred at
+radius r0 - c_s, height x_s = L - r_s, between the outer and the inner wall. Arcs are
+sampled so the chord sagitta is within the chordal tolerance; the polygon sagitta of the
+revolution likewise.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+from typing import Any
+
+import ezdxf
+import numpy as np
+import trimesh
+from ezdxf import units
+
+from .harmonic import HarmonicDesign, contact_point, contact_state, tilt_angle
+
+
+def _sections(radius: float, tol: float) -> int:
+    return max(24, int(math.ceil(math.pi / math.acos(1.0 - tol / radius))))
+
+
+def circular_spline_mesh(d: HarmonicDesign) -> trimesh.Trimesh:
+    c = d.circular_spline
+    tol = d.mesh.chord_tolerance_mm
+    prof = np.array([[c.bore_small_radius_mm, 0.0], [c.outer_radius_mm, 0.0],
+                     [c.outer_radius_mm, c.bore_length_mm], [c.bore_large_radius_mm, c.bore_length_mm],
+                     [c.bore_small_radius_mm, 0.0]])
+    return trimesh.creation.revolve(prof, sections=_sections(c.outer_radius_mm, tol))
+
+
+def flexspline_profile(d: HarmonicDesign) -> np.ndarray:
+    """Closed (r, z) polygon of the cup's half section, counter-clockwise."""
+    f = d.flexspline
+    tol = d.mesh.chord_tolerance_mm
+    r0, t, rs, cs = f.neutral_radius_mm, f.wall_thickness_mm, f.arc_radius_mm, f.arc_centre_offset_mm
+    ro, ri = r0 + 0.5 * t, r0 - 0.5 * t
+    cr, cz = r0 - cs, d.x_s
+    if cr + rs <= ro:
+        raise ValueError("the contact arc does not bulge beyond the outer wall")
+    # arc from the outer wall (lower junction) over the bulge to the inner wall (upper junction)
+    th0 = -math.acos((ro - cr) / rs)              # below the centre, on the outer wall
+    th1 = math.acos((ri - cr) / rs) if abs(ri - cr) < rs else math.pi / 2
+    dth = 2 * math.acos(1 - tol / rs)
+    th = np.linspace(th0, th1, max(8, int(math.ceil((th1 - th0) / dth)) + 1))
+    arc = np.column_stack([cr + rs * np.cos(th), cz + rs * np.sin(th)])
+    pts = [[0.0, 0.0], [ro, 0.0], *arc.tolist(), [ri, t], [0.0, t]]
+    return np.array(pts)
+
+
+def flexspline_mesh(d: HarmonicDesign) -> trimesh.Trimesh:
+    prof = flexspline_profile(d)
+    # trimesh.revolve wants a line that is closed or touches the axis; our polygon touches it
+    return trimesh.creation.revolve(prof, sections=_sections(float(prof[:, 0].max()), d.mesh.chord_tolerance_mm))
+
+
+def ratio_table_csv(table: list[dict[str, Any]]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(table[0]), lineterminator="\n")
+    w.writeheader()
+    for row in table:
+        w.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+    return buf.getvalue()
+
+
+def plot_ratio(d: HarmonicDesign, out: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    a = np.linspace(d.positions.min_mm, d.positions.max_mm, 400)
+    st = contact_state(d, a)
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    ax[0].semilogy(a, st["ratio"])
+    ax[0].set_xlabel("position a of the cone's small end (mm)")
+    ax[0].set_ylabel("ratio i = r0 / Delta")
+    ax[0].grid(alpha=0.3, which="both")
+    ax[1].plot(a, st["radius_difference_mm"] * 1e3)
+    ax[1].set_xlabel("position a (mm)")
+    ax[1].set_ylabel("radius difference Delta (um)")
+    ax[1].grid(alpha=0.3)
+    fig.suptitle(f"{d.name}: stepless harmonic friction drive")
+    names = []
+    for ext in ("png", "svg"):
+        fig.savefig(out / f"ratio.{ext}", dpi=130, bbox_inches="tight",
+                    metadata={"Date": None} if ext == "svg" else None)
+        names.append(f"ratio.{ext}")
+    plt.close(fig)
+    return names
+
+
+def write_dxf(d: HarmonicDesign, path: Path) -> None:
+    """Axial section (major axis) at each position of ``positions.drawing_mm``: the tilted
+    flexspline generatrix (LINE, neutral layer) with its contact ARC, and the cone bore
+    (LINE); one named block per position (``POSITION_<k>``), x from the flexspline bottom."""
+    doc = ezdxf.new("R2010", setup=True)
+    doc.units = units.MM
+    doc.header["$INSUNITS"] = 4
+    for name, color, lt in (("PROFILE", 7, "Continuous"), ("CENTRE", 1, "CENTER"), ("ANNOTATION", 2, "Continuous")):
+        doc.layers.add(name, color=color, linetype=lt)
+    msp = doc.modelspace()
+    f, c = d.flexspline, d.circular_spline
+    for k, a in enumerate(d.positions.drawing_mm):
+        beta = float(tilt_angle(d, a))
+        blk = doc.blocks.new(f"POSITION_{k}")
+        r0 = f.neutral_radius_mm
+        g = np.array([math.cos(beta), math.sin(beta)])
+        nrm = np.array([-math.sin(beta), math.cos(beta)])
+        A = np.array([0.0, r0])
+        C = A + d.x_s * g - f.arc_centre_offset_mm * nrm
+        blk.add_line(tuple(A), tuple(A + d.x_s * g), dxfattribs={"layer": "PROFILE"})
+        # contact arc: +-30 deg about the contact direction (normal of the cone wall)
+        ang = math.degrees(math.pi / 2 + d.alpha)
+        blk.add_arc(tuple(C), f.arc_radius_mm, ang - 30.0, ang + 30.0, dxfattribs={"layer": "PROFILE"})
+        blk.add_line((a, c.bore_small_radius_mm), (a + c.bore_length_mm, c.bore_large_radius_mm),
+                     dxfattribs={"layer": "PROFILE"})
+        blk.add_line((-5.0, 0.0), (f.length_mm + 5.0, 0.0), dxfattribs={"layer": "CENTRE"})
+        px, pr = contact_point(d, a)
+        st = contact_state(d, a)
+        blk.add_text(f"a = {a:g} mm, beta = {math.degrees(beta):.5f} deg, contact r = {float(st['contact_radius_mm']):.4f}, "
+                     f"Delta = {float(st['radius_difference_mm']):.5f} mm, i = {float(st['ratio']):.1f}",
+                     height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, c.outer_radius_mm + 2.0))
+        blk.add_point((px, pr), dxfattribs={"layer": "ANNOTATION"})
+        msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
+    msp.add_text(f"{d.name}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; units mm",
+                 height=2.0, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, -10.0))
+    doc.saveas(path)
