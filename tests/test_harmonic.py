@@ -56,7 +56,8 @@ def test_contact_is_tangent_to_the_cone_wall():
         P0 = np.array([a, c.bore_small_radius_mm])
         u = np.array([c.bore_length_mm, c.bore_large_radius_mm - c.bore_small_radius_mm])
         u /= np.linalg.norm(u)
-        dist = abs(np.cross(u, C - P0))
+        w = C - P0
+        dist = abs(u[0] * w[1] - u[1] * w[0])
         assert dist == pytest.approx(f.arc_radius_mm, abs=1e-10)
         x, r = contact_point(d, a)
         assert r == pytest.approx(c.bore_small_radius_mm + (x - a) * math.tan(d.alpha), abs=1e-10)

@@ -188,3 +188,20 @@ def test_end_faces_are_planar_and_contain_corner_points(part):
             theta = 2 * math.pi * (tm.z_lo - u - tm.first_mid - k * prof.pitch) / prof.lead
             expect = np.array([r * math.cos(theta), r * math.sin(theta), tm.z_lo])
             assert np.min(np.linalg.norm(lo_verts - expect, axis=1)) < 1e-12
+
+
+@pytest.mark.heavy
+def test_fine_tolerance_assembly_meshes(heavy_scale):
+    """The default design's parts at the finest benchmark tolerance (0.5 um; CI: 2 um):
+    closed, accepted by manifold3d, within tolerance everywhere."""
+    from prs_geom.assembly import build_assembly
+    tol = 0.0005 if heavy_scale == "full" else 0.002
+    asm = build_assembly(default_design(), tol=tol, gears=False)
+    for part, tm in asm.parts.items():
+        m = tm.to_trimesh()
+        assert m.is_watertight and m.is_winding_consistent, part
+        assert manifold_status(tm.vertices, tm.faces) == "NoError"
+        dev = measure_deviation(tm)
+        assert dev["max_deviation_mm"] <= tol, (part, dev)
+    V, F = asm.combined_arrays()
+    assert len(F) > (1_500_000 if heavy_scale == "full" else 400_000)
