@@ -48,7 +48,8 @@ MAX_PITCH_DEVIATION = 0.02
 #: Relative tolerance under which a standard-sizing relation counts as held.
 SIZING_RTOL = 1e-9
 
-_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+#: Allowed design names (they name output folders).
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 
 
 # --------------------------------------------------------------------------- checks
@@ -323,7 +324,7 @@ class PRSDesign:
     mesh: MeshSettings = field(default_factory=MeshSettings)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
+        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
             raise DesignError("name", self.name,
                               "must be 1-64 characters of letters, digits, '_', '.', '-', "
                               "starting with a letter or digit (it names the output folder)")

@@ -25,7 +25,7 @@ import fcl
 import numpy as np
 from numpy.typing import NDArray
 
-from .contact import ContactBatch, euclidean_distance, solve_collinear, theoretical_screw, tooth_contacts
+from .contact import euclidean_distance, solve_collinear, theoretical_screw, tooth_contacts
 from .design import PRSDesign
 
 #: Axial clearance (mm) added on top of the largest interference so all checked contacts are open.
@@ -79,7 +79,8 @@ def flank_patch(part, r_c: float, th_c: float, m: float, xi: float, tol: float,
     return V, F, err
 
 
-def _bvh(V: NDArray, F: NDArray) -> fcl.BVHModel:
+def bvh_model(V: NDArray, F: NDArray) -> fcl.BVHModel:
+    """An FCL BVH of a triangle mesh (float64 vertices)."""
     g = fcl.BVHModel()
     g.beginModel(len(V), len(F))
     g.addSubModel(np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int32))
@@ -121,8 +122,8 @@ def verify_side(design: PRSDesign, side: str, tol: float, rollers: NDArray, teet
     r0, t0, rho0, ph0 = sol.q[0]
     VA, FA, errA = flank_patch(batch.A, r0, t0, batch.m_a[0], batch.xi_a[0], tol)
     VB, FB, errB = flank_patch(batch.B, rho0, ph0, batch.m_b[0], batch.xi_b[0], tol)
-    objA = fcl.CollisionObject(_bvh(VA, FA), fcl.Transform())
-    objB = fcl.CollisionObject(_bvh(VB, FB), fcl.Transform())
+    objA = fcl.CollisionObject(bvh_model(VA, FA), fcl.Transform())
+    objB = fcl.CollisionObject(bvh_model(VB, FB), fcl.Transform())
     ZA0 = batch.A.z_derivatives(sol.q[:1, 0], sol.q[:1, 1], batch.m_a[:1], batch.xi_a[:1])[0][0]
     ZB0 = batch.B.z_derivatives(sol.q[:1, 2], sol.q[:1, 3], batch.m_b[:1], batch.xi_b[:1])[0][0]
     out = []

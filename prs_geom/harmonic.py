@@ -30,7 +30,6 @@ Model (reconstructed in DOMAIN.md section 6; its assumptions, stated here):
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,24 +37,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
+# the PRS design model's validators: both product lines word their errors alike
+from .design import NAME_RE, _positive, _real
 from .errors import DesignError
-
-_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
-
-
-def _pos(fld: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise DesignError(fld, v, "must be a finite number")
-    if v <= 0:
-        raise DesignError(fld, v, "must be > 0")
-    return float(v)
-
-
-def _real(fld: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise DesignError(fld, v, "must be a finite number")
-    return float(v)
-
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -67,7 +51,7 @@ class Flexspline:
 
     def __post_init__(self) -> None:
         for f in ("neutral_radius_mm", "length_mm", "arc_radius_mm", "arc_centre_offset_mm", "wall_thickness_mm"):
-            object.__setattr__(self, f, _pos(f, getattr(self, f)))
+            object.__setattr__(self, f, _positive(f, getattr(self, f)))
         if self.arc_radius_mm >= self.length_mm:
             raise DesignError("arc_radius_mm", self.arc_radius_mm, f"must be less than length_mm ({self.length_mm})")
         if self.wall_thickness_mm >= 0.5 * self.neutral_radius_mm:
@@ -83,7 +67,7 @@ class CircularSpline:
 
     def __post_init__(self) -> None:
         for f in ("bore_small_radius_mm", "bore_large_radius_mm", "bore_length_mm", "outer_radius_mm"):
-            object.__setattr__(self, f, _pos(f, getattr(self, f)))
+            object.__setattr__(self, f, _positive(f, getattr(self, f)))
         if self.bore_large_radius_mm <= self.bore_small_radius_mm:
             raise DesignError("bore_large_radius_mm", self.bore_large_radius_mm,
                               f"must exceed bore_small_radius_mm ({self.bore_small_radius_mm}): the bore is a cone")
@@ -119,7 +103,7 @@ class HarmonicMesh:
     chord_tolerance_mm: float = 0.01
 
     def __post_init__(self) -> None:
-        t = _pos("chord_tolerance_mm", self.chord_tolerance_mm)
+        t = _positive("chord_tolerance_mm", self.chord_tolerance_mm)
         if not 1e-4 <= t <= 0.1:
             raise DesignError("chord_tolerance_mm", t, "must be from 0.0001 mm to 0.1 mm")
         object.__setattr__(self, "chord_tolerance_mm", t)
@@ -136,7 +120,7 @@ class HarmonicDesign:
     mesh: HarmonicMesh = field(default_factory=HarmonicMesh)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not _NAME_RE.match(self.name):
+        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
             raise DesignError("name", self.name, "must be 1-64 characters of letters, digits, '_', '.', '-'")
         f, c = self.flexspline, self.circular_spline
         if c.bore_small_radius_mm <= f.neutral_radius_mm:

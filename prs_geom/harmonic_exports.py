@@ -73,10 +73,7 @@ def ratio_table_csv(table: list[dict[str, Any]]) -> str:
 
 
 def plot_ratio(d: HarmonicDesign, out: Path) -> list[str]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .plots import plt, save_figure
 
     a = np.linspace(d.positions.min_mm, d.positions.max_mm, 400)
     st = contact_state(d, a)
@@ -90,13 +87,7 @@ def plot_ratio(d: HarmonicDesign, out: Path) -> list[str]:
     ax[1].set_ylabel("radius difference Delta (um)")
     ax[1].grid(alpha=0.3)
     fig.suptitle(f"{d.name}: stepless harmonic friction drive")
-    names = []
-    for ext in ("png", "svg"):
-        fig.savefig(out / f"ratio.{ext}", dpi=130, bbox_inches="tight",
-                    metadata={"Date": None} if ext == "svg" else None)
-        names.append(f"ratio.{ext}")
-    plt.close(fig)
-    return names
+    return save_figure(fig, out, "ratio")
 
 
 def write_dxf(d: HarmonicDesign, path: Path) -> None:

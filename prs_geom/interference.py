@@ -13,7 +13,6 @@ interference; anything thicker is interference.
 """
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
 
@@ -25,20 +24,13 @@ import trimesh
 from .assembly import Assembly, build_assembly
 from .contact import theoretical_screw
 from .design import PRSDesign
+from .fcl_verify import bvh_model
 from .progress import ProgressFn, silent
 
 MAX_CONTACTS = 20000
 #: The check meshes at no coarser than this (mm), so that the overlap allowed for chordal
 #: error (2 x tolerance) stays far below the interference it must detect.
 CHECK_TOLERANCE_MM = 0.002
-
-
-def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
-    g = fcl.BVHModel()
-    g.beginModel(len(mesh.vertices), len(mesh.faces))
-    g.addSubModel(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int32))
-    g.endModel()
-    return g
 
 
 def _manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
@@ -54,7 +46,7 @@ def check_assembly(asm: Assembly, tol: float, progress: ProgressFn = silent) -> 
     objs = {}
     for name, (mesh, T, _) in asm.placed.items():
         if id(mesh) not in bvhs:
-            bvhs[id(mesh)] = _bvh(mesh)
+            bvhs[id(mesh)] = bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces))
         g = bvhs[id(mesh)]
         objs[name] = fcl.CollisionObject(g, fcl.Transform(T[:3, :3], T[:3, 3]))
     names = list(asm.placed)

@@ -14,7 +14,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 
-def _save(fig, out: Path, stem: str) -> list[str]:
+def save_figure(fig, out: Path, stem: str) -> list[str]:
+    """Save ``fig`` as ``stem.png`` and ``stem.svg`` (no timestamp in the SVG) and close it."""
     names = []
     for ext in ("png", "svg"):
         fig.savefig(out / f"{stem}.{ext}", dpi=130, bbox_inches="tight",
@@ -43,7 +44,7 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     axes[0].set_ylabel("load-distribution coefficient f_j / (F0 / n z)")
     axes[0].legend()
     fig.suptitle(f"{name}: load distribution at the design load")
-    files += _save(fig, out, "loads_ldc")
+    files += save_figure(fig, out, "loads_ldc")
 
     fig, ax = plt.subplots(figsize=(7, 4))
     j = np.arange(1, len(roller_corr_um) + 1)
@@ -54,7 +55,7 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     ax.set_title(f"{name}: pitch corrections ({designed_label})")
     ax.grid(alpha=0.3)
     ax.legend()
-    files += _save(fig, out, "pitch_corrections")
+    files += save_figure(fig, out, "pitch_corrections")
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     for ax, key, title in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
@@ -67,5 +68,5 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     axes[0].set_ylabel("load-distribution coefficient")
     axes[0].legend()
     fig.suptitle(f"{name}: off-design load distribution")
-    files += _save(fig, out, "off_design")
+    files += save_figure(fig, out, "off_design")
     return files

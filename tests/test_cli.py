@@ -1,18 +1,16 @@
 """CLI behaviour: exit codes, error messages, atomic output (issue 2)."""
-import io
-import json
 import math
 import subprocess
 import sys
 import tempfile
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prs_geom import cli, pipeline
+from cli_helpers import run
+from prs_geom import pipeline
 from prs_geom.designio import design_to_dict, toml_string
 from prs_geom.design import default_design
 
@@ -49,11 +47,6 @@ def _write(data, path):
     Path(path).write_text("\n".join(lines) + "\n")
 
 
-def run(argv):
-    err, out = io.StringIO(), io.StringIO()
-    with redirect_stderr(err), redirect_stdout(out):
-        code = cli.main(argv)
-    return code, out.getvalue(), err.getvalue()
 
 
 not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), st.just(math.inf),

@@ -1,8 +1,6 @@
 """Stepless harmonic friction drive (issue 7)."""
-import io
 import json
 import math
-from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import ezdxf
@@ -10,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from prs_geom import cli
+from cli_helpers import run
 from prs_geom.designio import dumps_toml, load_design, loads_toml
 from prs_geom.errors import DesignError
 from prs_geom.harmonic import (CircularSpline, Flexspline, HarmonicDesign, Positions, contact_point,
@@ -22,11 +20,6 @@ from prs_geom.pipeline import build
 EXAMPLES = Path(__file__).parent.parent / "examples"
 
 
-def run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        code = cli.main(argv)
-    return code, out.getvalue(), err.getvalue()
 
 
 def test_worked_example_reproduces_published_values():

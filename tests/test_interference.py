@@ -1,18 +1,10 @@
 """Interference check (issue 4): nominal screw interferes, corrected screw does not."""
-import io
 import json
-from contextlib import redirect_stderr, redirect_stdout
-
-import pytest
-
-from prs_geom import cli
 
 
-def run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        code = cli.main(argv)
-    return code, out.getvalue(), err.getvalue()
+from cli_helpers import run
+
+
 
 
 def test_check_default_design_corrected_screw_is_clean():

@@ -1,8 +1,6 @@
 """Load distribution and equal-load pitch design (issue 5)."""
-import io
 import json
 import math
-from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import replace
 
 import numpy as np
@@ -10,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prs_geom import cli
-from prs_geom.design import Loading, PRSDesign, Roller, default_design
+from cli_helpers import run
+from prs_geom.design import Loading, default_design
 from prs_geom.designio import load_design
 from prs_geom.errors import ConvergenceError
 from prs_geom.loads import (build_model, closed_form_equal_load, design_pitches, ellipticity, forward,
@@ -20,11 +18,6 @@ from prs_geom.loads import (build_model, closed_form_equal_load, design_pitches,
 from strategies import standard_designs
 
 
-def run(argv):
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        code = cli.main(argv)
-    return code, out.getvalue(), err.getvalue()
 
 
 @settings(max_examples=15, deadline=None)

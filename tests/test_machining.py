@@ -1,5 +1,4 @@
 """Machining sheets: process logic, CSV and XLSX read back (issue 6)."""
-import json
 from pathlib import Path
 
 import numpy as np

@@ -6,12 +6,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prs_geom.assembly import build_part, part_warps, screw_z_range, thread_length
+from prs_geom.assembly import build_part, part_warps, thread_length
 from prs_geom.design import PRSDesign, Roller, Nut, Thread, default_design
 from prs_geom.designio import load_design
 from prs_geom.mesh import (FACE_THREAD, analytic_thread_volume, axial_line_crossings,
-                           manifold_status, measure_deviation, thread_mesh)
-from prs_geom.profiles import ThreadProfiles
+                           manifold_status, measure_deviation)
 from strategies import standard_designs
 
 EXAMPLES = __import__("pathlib").Path(__file__).parent.parent / "examples"
