@@ -216,7 +216,8 @@ def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
 def harmonic_stage(ctx: BuildContext) -> None:
     """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
     from .harmonic import harmonic_report
-    from .harmonic_exports import (circular_spline_mesh, flexspline_mesh, plot_ratio, ratio_table_csv,
+    from .harmonic_exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
+                                   flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
                                    write_dxf)
 
     d = ctx.design
@@ -226,10 +227,16 @@ def harmonic_stage(ctx: BuildContext) -> None:
     ctx.report["files"] += plot_ratio(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))
     rows = []
-    for name, mesh in (("circular_spline", circular_spline_mesh(d)), ("flexspline", flexspline_mesh(d))):
+    tol = d.mesh.chord_tolerance_mm
+    for name, mesh, prof, arc_bound in (
+            ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d), 0.0),
+            ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
         ctx.add_file(f"{name}.stl").write_bytes(trimesh.exchange.stl.export_stl(mesh))
+        rev = revolve_deviation(mesh, prof)
         rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
-                     "volume_mm3": float(mesh.volume), "chord_tolerance_mm": d.mesh.chord_tolerance_mm})
+                     "volume_mm3": float(mesh.volume), "chord_tolerance_mm": tol,
+                     "revolution_deviation_mm": rev, "arc_chord_bound_mm": arc_bound,
+                     "max_deviation_mm": rev + arc_bound})
     ctx.report["checks"]["meshes"] = rows
 
 

@@ -151,6 +151,8 @@ def test_build_harmonic_writes_exports(tmp_path):
     for name in ("circular_spline", "flexspline"):
         m = trimesh.load(out / f"{name}.stl")
         assert m.is_watertight
+    for row in report["checks"]["meshes"]:
+        assert 0 < row["revolution_deviation_mm"] and row["max_deviation_mm"] <= row["chord_tolerance_mm"]
     doc = ezdxf.readfile(out / "axial_sections.dxf")
     assert doc.header["$INSUNITS"] == 4
     blocks = [b for b in doc.blocks if b.name.startswith("POSITION_")]
