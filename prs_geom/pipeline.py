@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -28,14 +28,12 @@ REPORT_NAME = "report.json"
 
 @dataclass
 class BuildContext:
-    """What stages share: the design, the temporary output folder, the report, and a
-    cache of intermediate results (so no stage computes another's work twice)."""
+    """What stages share: the design, the temporary output folder and the report."""
 
     design: PRSDesign
     out: Path
     report: dict[str, Any]
     progress: ProgressFn = silent
-    cache: dict[str, Any] = field(default_factory=dict)
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
@@ -103,7 +101,6 @@ def stage_meshes(ctx: BuildContext) -> None:
 
     d = ctx.design
     asm = build_assembly(d, progress=ctx.progress)
-    ctx.cache["assembly"] = asm
     rows = []
     lengths = {"screw": d.screw.length_mm, "roller": thread_length(d), "nut": thread_length(d)}
     for i, (name, tm) in enumerate(asm.parts.items()):
