@@ -7,9 +7,11 @@ import ezdxf
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cli_helpers import run
-from prs_geom.designio import dumps_toml, load_design, loads_toml
+from prs_geom.designio import dumps_toml, load_design, loads_toml, toml_string
 from prs_geom.errors import DesignError
 from prs_geom.harmonic import (CircularSpline, Flexspline, HarmonicDesign, Positions, contact_point,
                                contact_state, infinite_ratio_position, it_tolerance_um, ratio,
@@ -159,3 +161,29 @@ def test_build_harmonic_writes_exports(tmp_path):
     assert len(blocks) == 3
     arcs = [e for e in blocks[2] if e.dxftype() == "ARC"]
     assert len(arcs) == 1 and arcs[0].dxf.radius == pytest.approx(15.0)
+
+
+HARMONIC_FIELDS = [
+    "flexspline.neutral_radius_mm", "flexspline.length_mm", "flexspline.arc_radius_mm",
+    "flexspline.arc_centre_offset_mm", "flexspline.wall_thickness_mm",
+    "circular_spline.bore_small_radius_mm", "circular_spline.bore_large_radius_mm",
+    "circular_spline.bore_length_mm", "circular_spline.outer_radius_mm", "mesh.chord_tolerance_mm",
+]
+
+
+@pytest.mark.parametrize("field", HARMONIC_FIELDS)
+@settings(max_examples=6)
+@given(value=st.one_of(st.floats(max_value=0.0, allow_nan=False), st.just(math.nan), st.just(math.inf),
+                       st.text(max_size=3), st.booleans()))
+def test_invalid_harmonic_field_gives_exit_2_and_no_output(field, value):
+    import tempfile
+    section, key = field.split(".")
+    lit = ("nan" if math.isnan(value) else "inf") if isinstance(value, float) and not math.isfinite(value) \
+        else toml_string(value) if isinstance(value, str) else str(value).lower() if isinstance(value, bool) else repr(value)
+    with tempfile.TemporaryDirectory() as tmp:
+        f = Path(tmp) / "bad.toml"
+        f.write_text(f'kind = "harmonic"\n[{section}]\n{key} = {lit}\n')
+        out = Path(tmp) / "out"
+        code, _, err = run(["build", str(f), "--out", str(out), "--quiet"])
+        assert code == 2 and err.startswith(f"error: {field}"), err
+        assert not out.exists()
