@@ -492,7 +492,6 @@ def contact_report(design: PRSDesign) -> dict[str, Any]:
     res = solve_collinear(batch, q0)
     eu, _ = euclidean_distance(batch, res.q)
     rn = {fl: contact_point(design, "nut", fl).as_dict() for fl in ("upper", "lower")}
-    graded = design.roller.pitch_list_mm is not None or design.nut.pitch_list_mm is not None
     return {
         "conventions": ANGLE_CONVENTIONS,
         "screw_roller": {
@@ -508,5 +507,5 @@ def contact_report(design: PRSDesign) -> dict[str, Any]:
             "diameter_iterations": theo.iterations,
         },
         "roller_nut": rn,
-        "tooth_gaps": tooth_gaps(design, theo.profile) if graded else None,
+        "tooth_gaps": tooth_gaps(design, theo.profile) if design.graded else None,
     }

@@ -98,6 +98,14 @@ def _pitch_list(fld: str, value: Any) -> tuple[float, ...] | None:
     return tuple(out)
 
 
+def check_name(value: Any) -> str:
+    """A design name: it names the output folder, so only safe file-name characters."""
+    if not isinstance(value, str) or not NAME_RE.match(value):
+        raise DesignError("name", value, "must be 1-64 characters of letters, digits, '_', '.', '-', "
+                                         "starting with a letter or digit (it names the output folder)")
+    return value
+
+
 def _um(x: float) -> float:
     """Round a defaulted diameter to 0.1 um, as a drawing would state it."""
     return round(x, 4)
@@ -324,10 +332,7 @@ class PRSDesign:
     mesh: MeshSettings = field(default_factory=MeshSettings)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
-            raise DesignError("name", self.name,
-                              "must be 1-64 characters of letters, digits, '_', '.', '-', "
-                              "starting with a letter or digit (it names the output folder)")
+        check_name(self.name)
         self._resolve_defaults()
         self._check()
 
@@ -465,6 +470,11 @@ class PRSDesign:
         return msgs
 
     # -- derived quantities ---------------------------------------------------
+    @property
+    def graded(self) -> bool:
+        """True when the roller or the nut carries a pitch list."""
+        return self.roller.pitch_list_mm is not None or self.nut.pitch_list_mm is not None
+
     @property
     def centre_distance_mm(self) -> float:
         """Screw-roller centre distance a = r_s + r_r (mm), held fixed."""

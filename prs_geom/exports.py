@@ -1,21 +1,16 @@
 """Mesh exports: binary STL per part and for the assembly, GLB scene with named parts.
 
 STL and GLB store vertex coordinates as float32: the rounding this costs is measured and
-reported (``float32_rounding_mm``) next to the chordal error.
+reported (``float32_rounding_mm``, :func:`prs_geom.mesh.float32_rounding`) next to the
+chordal error.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import trimesh
 
 from .assembly import Assembly
-
-
-def float32_rounding(vertices: np.ndarray) -> float:
-    """Largest coordinate change (mm) from storing ``vertices`` as float32."""
-    return float(np.abs(vertices.astype(np.float32).astype(np.float64) - vertices).max(initial=0.0))
 
 
 def write_stl(mesh: trimesh.Trimesh, path: Path) -> None:

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 # the PRS design model's validators: both product lines word their errors alike
-from .design import NAME_RE, _positive, _real
+from .design import _positive, _real, check_name
 from .errors import DesignError
 
 @dataclass(frozen=True)
@@ -120,8 +120,7 @@ class HarmonicDesign:
     mesh: HarmonicMesh = field(default_factory=HarmonicMesh)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not NAME_RE.match(self.name):
-            raise DesignError("name", self.name, "must be 1-64 characters of letters, digits, '_', '.', '-'")
+        check_name(self.name)
         f, c = self.flexspline, self.circular_spline
         if c.bore_small_radius_mm <= f.neutral_radius_mm:
             raise DesignError("circular_spline.bore_small_radius_mm", c.bore_small_radius_mm,

@@ -89,12 +89,11 @@ def check_assembly(asm: Assembly, tol: float, progress: ProgressFn = silent) -> 
 
 
 def interference(design: PRSDesign, screw: str = "corrected", tol: float | None = None,
-                 progress: ProgressFn = silent, asm: Assembly | None = None) -> dict[str, Any]:
+                 progress: ProgressFn = silent) -> dict[str, Any]:
     """Interference check with the ``"corrected"`` (theoretical) or ``"nominal"`` screw."""
     tol = tol or min(design.mesh.chord_tolerance_mm, CHECK_TOLERANCE_MM)
     prof = theoretical_screw(design).profile if screw == "corrected" else None
-    if asm is None or screw == "corrected" or asm.parts["screw"].chord_tolerance != tol:
-        asm = build_assembly(design, tol=tol, screw_profile=prof, progress=progress)
+    asm = build_assembly(design, tol=tol, screw_profile=prof, progress=progress)
     out = check_assembly(asm, tol, progress)
     out["screw"] = screw
     out["screw_pitch_diameter_mm"] = 2.0 * (prof.pitch_radius if prof else 0.5 * design.screw.pitch_diameter_mm)

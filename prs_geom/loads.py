@@ -54,14 +54,14 @@ Compliances
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import optimize, special
 
-from .design import Nut, PRSDesign, Roller
+from .design import PRSDesign
 from .errors import ConvergenceError, DesignError
 from .profiles import ThreadProfiles
 
@@ -436,8 +436,6 @@ def closed_form_equal_load(design: PRSDesign) -> tuple[NDArray, NDArray]:
 
 def with_pitch_lists(design: PRSDesign, pd: PitchDesign, name: str | None = None) -> PRSDesign:
     """A new design carrying the designed pitch lists."""
-    from dataclasses import replace
-
     return design.with_changes(
         name=name or design.name,
         roller=replace(design.roller, pitch_list_mm=pd.roller_mm),
@@ -485,10 +483,11 @@ def loads_report(design: PRSDesign, model: LoadModel | None = None) -> dict[str,
     """The ``loads`` section of report.json."""
     model = model or build_model(design)
     r = forward(design, model=model)
-    const = design.with_changes(roller=Roller(**{**design.roller.__dict__, "pitch_list_mm": None}),
-                                nut=Nut(**{**design.nut.__dict__, "pitch_list_mm": None}))
+    const = design.with_changes(roller=replace(design.roller, pitch_list_mm=None),
+                                nut=replace(design.nut, pitch_list_mm=None))
     rc = forward(const, model=model)
     lin = forward(design, model=model, linear_at=r.mean)
+    stiffness = axial_stiffness(design, model)
     return {
         "design_load_N": design.loading.axial_load_n,
         "installation": design.loading.installation,
@@ -497,8 +496,8 @@ def loads_report(design: PRSDesign, model: LoadModel | None = None) -> dict[str,
         "max_ldc": float(max(r.ldc_nr.max(), r.ldc_rs.max())),
         "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
         "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
-        "axial_stiffness_N_per_um": axial_stiffness(design, model)["secant_N_per_um"],
-        "axial_stiffness": axial_stiffness(design, model),
+        "axial_stiffness_N_per_um": stiffness["secant_N_per_um"],
+        "axial_stiffness": stiffness,
         "constant_pitch": {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
                            "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))},
         "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),

@@ -472,6 +472,11 @@ def manifold_status(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> 
     return str(m.status()).split(".")[-1]
 
 
+def float32_rounding(vertices: NDArray[np.float64]) -> float:
+    """Largest coordinate change (mm) from storing ``vertices`` as float32 (STL, GLB)."""
+    return float(np.abs(vertices.astype(np.float32).astype(np.float64) - vertices).max(initial=0.0))
+
+
 def mesh_report(tm: ThreadMesh, analytic_volume: float | None = None) -> dict[str, Any]:
     """The ``checks.meshes`` entry of one part: counts, closure, manifold3d verdict, the
     sampled deviation from the analytic surface and the volume check."""
@@ -490,7 +495,7 @@ def mesh_report(tm: ThreadMesh, analytic_volume: float | None = None) -> dict[st
         "deviation_samples": dev["samples"],
         "deviation_measure": "axial-section distance to the analytic profile, 7 points per face",
         "volume_mm3": float(m.volume),
-        "float32_rounding_mm": float(np.abs(tm.vertices.astype(np.float32) - tm.vertices).max()),
+        "float32_rounding_mm": float32_rounding(tm.vertices),
     }
     if analytic_volume is not None:
         row["analytic_volume_mm3"] = analytic_volume

@@ -75,10 +75,9 @@ def stage_loads(ctx: BuildContext) -> None:
     model = build_model(d)
     rep = loads_report(d, model)
     ctx.report["loads"] = rep
-    graded = d.roller.pitch_list_mm is not None or d.nut.pitch_list_mm is not None
     equal = design_pitches(d, model=model)
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
-    if graded:
+    if d.graded:
         shown = {"ldc_nut_roller": rep["ldc_nut_roller"], "ldc_roller_screw": rep["ldc_roller_screw"]}
         off, label = rep["off_design"], "design pitch lists"
         pr, pn = np.array(d.pitch_list("roller")), np.array(d.pitch_list("nut"))

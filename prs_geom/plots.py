@@ -25,6 +25,22 @@ def save_figure(fig, out: Path, stem: str) -> list[str]:
     return names
 
 
+def _per_side(draw, subtitle: str, ylabel: str, title: str):
+    """Two panels, nut-roller and roller-screw, sharing the coefficient axis; ``draw(ax, key)``
+    plots the curves of one side (key: "ldc_nut_roller" or "ldc_roller_screw")."""
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    for ax, key, side in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+        draw(ax, key)
+        ax.axhline(1.0, color="0.6", lw=0.8)
+        ax.set_title(f"{side}{subtitle}")
+        ax.set_xlabel("tooth (1 = loaded end)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel(ylabel)
+    axes[0].legend()
+    fig.suptitle(title)
+    return fig
+
+
 def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, Any],
                off: list[dict[str, Any]], roller_corr_um: np.ndarray, nut_corr_um: np.ndarray,
                designed_label: str) -> list[str]:
@@ -33,17 +49,13 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     files = []
     n = len(const["ldc_nut_roller"])
     teeth = np.arange(1, n + 1)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, key, title in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+
+    def ldc(ax, key):
         ax.plot(teeth, const[key], "o-", label="constant pitch")
         ax.plot(teeth, designed[key], "s-", label=designed_label)
-        ax.axhline(1.0, color="0.6", lw=0.8)
-        ax.set_title(f"{title} contacts")
-        ax.set_xlabel("tooth (1 = loaded end)")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("load-distribution coefficient f_j / (F0 / n z)")
-    axes[0].legend()
-    fig.suptitle(f"{name}: load distribution at the design load")
+
+    fig = _per_side(ldc, " contacts", "load-distribution coefficient f_j / (F0 / n z)",
+                    f"{name}: load distribution at the design load")
     files += save_figure(fig, out, "loads_ldc")
 
     fig, ax = plt.subplots(figsize=(7, 4))
@@ -57,16 +69,11 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     ax.legend()
     files += save_figure(fig, out, "pitch_corrections")
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, key, title in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+    def off_curves(ax, key):
         for row in off:
             ax.plot(teeth, row[key], "-", label=f"{row['load_fraction'] * 100:.0f} % ({row['load_N']:.0f} N)")
-        ax.axhline(1.0, color="0.6", lw=0.8)
-        ax.set_title(f"{title}, design pitches")
-        ax.set_xlabel("tooth (1 = loaded end)")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("load-distribution coefficient")
-    axes[0].legend()
-    fig.suptitle(f"{name}: off-design load distribution")
+
+    fig = _per_side(off_curves, ", design pitches", "load-distribution coefficient",
+                    f"{name}: off-design load distribution")
     files += save_figure(fig, out, "off_design")
     return files
