@@ -1,12 +1,26 @@
 """Command-line interface ``prs-geom``.
 
-Exit codes: 0 success; 1 the analysis found a problem (e.g. interference) or a solver
-failed; 2 bad input (the message names the field, the value and the rule). Without
-``--debug`` no traceback is shown.
+Exit codes (README "Exit codes"):
+
+* 0 success;
+* 1 the analysis found a problem (e.g. interference) or a solver did not converge;
+* 2 bad input: a design value (the message names the field, the value and the rule), a
+  command-line flag, an output path that holds files prs-geom did not write, or a job
+  larger than the memory budget; nothing is written;
+* 3 the environment cannot do it: a path that cannot be read or written (permission,
+  disk full, missing folder; the message names the path and the OS reason) or a missing
+  optional extra (the message gives the install command);
+* 70 an internal error (a bug: please report it with the ``--debug`` traceback);
+* 130 interrupted by Ctrl-C (SIGINT), 143 terminated (SIGTERM): the temporary output is
+  removed and one line ``interrupted`` is printed.
+
+``--debug`` (anywhere on the command line) shows the traceback of any error.
 """
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 import warnings
 from pathlib import Path
@@ -15,14 +29,32 @@ from typing import Sequence
 from . import __version__
 from .design import PRSDesign, default_design
 from .designio import dumps_toml, load_design
-from .errors import DesignError, DesignWarning, PRSGeomError
+from .errors import DesignError, DesignWarning, EnvironmentFailure, PRSGeomError
+from .output import OutputRefused, check_output_dir, check_output_file, write_file_atomic
 from .progress import StderrProgress, silent
+from .resources import ResourceLimitError, parse_size
 
-EXIT_OK, EXIT_FOUND, EXIT_INPUT = 0, 1, 2
+EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
+EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
+#: Environment variable read as the default of ``--memory-budget``.
+MEMORY_BUDGET_ENV = "PRS_GEOM_MEMORY_BUDGET"
 
 
 class UsageError(PRSGeomError):
     """Bad command-line usage (exit code 2)."""
+
+
+class Terminated(BaseException):
+    """Raised in the main thread by the SIGTERM handler (not an Exception: nothing may
+    swallow it on the way out)."""
+
+
+def _memory_budget(args: argparse.Namespace) -> int | None:
+    text = getattr(args, "memory_budget", None)
+    if text is not None:
+        return parse_size(text, "--memory-budget")
+    env = os.environ.get(MEMORY_BUDGET_ENV)
+    return parse_size(env, MEMORY_BUDGET_ENV) if env else None
 
 
 def _load_any(path: str | None):
@@ -47,15 +79,37 @@ def _warn(design) -> None:
 
 
 # --------------------------------------------------------------------------- commands
+def _write_out_file(path: str, text: str, force: bool) -> None:
+    """Write a single output file: refused if it exists (unless ``force``), atomic."""
+    target = check_output_file(path, force)
+    write_file_atomic(target, text)
+
+
 def cmd_init(args: argparse.Namespace) -> int:
     text = dumps_toml(default_design(), header=(
         "prs_geom design file (TOML). Units: mm, N, MPa; angles in degrees.\n"
         "Every key is optional; omitted keys take the built-in default.\n"
         "Teeth are numbered 1..n from the loaded end."))
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+        _write_out_file(args.out, text, args.force)
+        print(f"wrote {args.out}", file=sys.stderr)
     else:
         sys.stdout.write(text)
+    return EXIT_OK
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    from .resources import estimate, format_bytes
+
+    design = _load_any(args.design)
+    _warn(design)
+    if isinstance(design, PRSDesign):
+        est = estimate(design)
+        print(f"design {design.name} is valid; a build meshes {est.export_triangles / 1e6:.2f} M "
+              f"triangles (check {est.check_triangles / 1e6:.2f} M), estimated peak memory "
+              f"{format_bytes(est.peak_bytes)}")
+    else:
+        print(f"design {design.name} (harmonic) is valid")
     return EXIT_OK
 
 
@@ -65,8 +119,12 @@ def cmd_build(args: argparse.Namespace) -> int:
     design = _load_any(args.design)
     _warn(design)
     out = Path(args.out) if args.out else Path("exports") / design.name
+    check_output_dir(out)   # refuse before any work
     progress = silent if args.quiet else StderrProgress()
-    report = build(design, out, progress=progress)
+    report = build(design, out, progress=progress, memory_budget=_memory_budget(args))
+    sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
+    for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
+        print(f"warning: {msg}", file=sys.stderr)
     if not args.quiet:
         print(f"wrote {len(report['files'])} files to {out}", file=sys.stderr)
     print(str(out / "report.json"))
@@ -112,8 +170,11 @@ def cmd_contact(args: argparse.Namespace) -> int:
 def cmd_check(args: argparse.Namespace) -> int:
     from .interference import interference
 
+    from .resources import guard
+
     design = _load(args.design)
     _warn(design)
+    guard(design, _memory_budget(args), export=False, check=True)
     progress = silent if args.quiet else StderrProgress()
     rep = interference(design, args.screw, progress=progress)
     if args.json:
@@ -141,7 +202,10 @@ def cmd_loads(args: argparse.Namespace) -> int:
         raise DesignError("--load", args.load, "must be > 0 N")
     if args.load is not None:
         from dataclasses import replace
-        design = design.with_changes(loading=replace(design.loading, axial_load_n=args.load))
+        try:
+            design = design.with_changes(loading=replace(design.loading, axial_load_n=args.load))
+        except DesignError as exc:
+            raise exc.renamed("--load") from None
     rep = loads_report(design)
     if args.json:
         _print_json(rep)
@@ -216,11 +280,8 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
         f"{design.loading.axial_load_n:g} N ({design.loading.installation}), written by prs-geom "
         f"design-pitch.\nForward check: largest coefficient error {err:.2e}."))
     if args.out:
-        out = Path(args.out)
-        tmp = out.with_name(f".{out.name}.tmp")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(out)
-        print(f"wrote {out}: largest coefficient error of the forward check {err:.2e}", file=sys.stderr)
+        _write_out_file(args.out, text, args.force)
+        print(f"wrote {args.out}: largest coefficient error of the forward check {err:.2e}", file=sys.stderr)
     else:
         sys.stdout.write(text)
     return EXIT_OK
@@ -238,8 +299,9 @@ def cmd_harmonic(args: argparse.Namespace) -> int:
     if args.a:
         for k, v in enumerate(args.a):
             if not d.positions.min_mm <= v <= d.positions.max_mm:
-                raise DesignError(f"--a[{k}]", v, f"must lie in positions [{d.positions.min_mm}, "
-                                                  f"{d.positions.max_mm}] mm")
+                raise DesignError(f"--a (value {k + 1})", v, f"must lie in positions.min_mm .. "
+                                                             f"positions.max_mm = [{d.positions.min_mm}, "
+                                                             f"{d.positions.max_mm}] mm")
         a = np.array(args.a, dtype=float)
     rep = harmonic_report(d, a)
     if args.json:
@@ -268,15 +330,31 @@ def make_parser() -> argparse.ArgumentParser:
         description="Planetary roller screw geometry: thread meshes, contact points, load "
                     "distribution, graded-pitch design and manufacturing exports.")
     parser.add_argument("--version", action="version", version=f"prs_geom {__version__}")
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--debug", action="store_true",
+                        help="show tracebacks on errors (accepted anywhere on the command line)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
     p = sub.add_parser("init", help="write the default design as a commented TOML file",
                        description="Write the built-in default design as a commented TOML "
                                    "design file (to stdout, or to --out).")
-    p.add_argument("--out", metavar="FILE", help="file to write instead of stdout")
+    p.add_argument("--out", metavar="FILE", help="file to write instead of stdout (an existing file "
+                                                 "is refused unless --force)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
     p.set_defaults(func=cmd_init)
+
+    p = sub.add_parser("validate", help="check a design file and estimate the size of its build",
+                       description="Read and validate a design file (exit 2 with the field, value and "
+                                   "rule when it is invalid), print the sizing warnings and the "
+                                   "estimated mesh size and memory of a build. Writes nothing.")
+    p.add_argument("design", nargs="?", metavar="DESIGN",
+                   help="design file (.toml or .json); the built-in default design if omitted")
+    p.set_defaults(func=cmd_validate)
+
+    def budget_arg(q: argparse.ArgumentParser) -> None:
+        q.add_argument("--memory-budget", metavar="SIZE",
+                       help=f"largest estimated peak memory to accept, e.g. 8G or 512M (default: "
+                            f"${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
 
     def design_arg(q: argparse.ArgumentParser) -> None:
         q.add_argument("design", nargs="?", metavar="DESIGN",
@@ -287,8 +365,11 @@ def make_parser() -> argparse.ArgumentParser:
                                    "report.json into an output folder, atomically: a failed "
                                    "run leaves an earlier output untouched.")
     design_arg(p)
-    p.add_argument("--out", metavar="DIR", help="output folder (default exports/<design name>)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default exports/<design name>): a new "
+                                                "path, an empty folder or an earlier prs-geom output "
+                                                "folder; anything else is refused")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    budget_arg(p)
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("contact", help="screw-roller and roller-nut contact points and the "
@@ -308,6 +389,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="screw pitch diameter: the theoretical one (default) or the nominal one")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    budget_arg(p)
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("loads", help="load distribution over the thread teeth",
@@ -326,7 +408,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", default="equal", metavar="equal|FILE",
                    help="'equal' (default) or a .json/.toml file {nut_roller: [...], roller_screw: [...]} "
                         "or a .csv with columns tooth,nut_roller,roller_screw (n coefficients each, mean 1)")
-    p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout)")
+    p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout); an "
+                                                     "existing file is refused unless --force")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
     p.add_argument("--name", help="name of the new design (default <name>-graded)")
     p.set_defaults(func=cmd_design_pitch)
 
@@ -335,37 +419,74 @@ def make_parser() -> argparse.ArgumentParser:
                                    "(DOMAIN.md section 6) as a function of the axial position a.")
     p.add_argument("design", nargs="?", metavar="FILE",
                    help="harmonic design file (kind = \"harmonic\"); the worked example if omitted")
-    p.add_argument("--a", type=float, nargs="+", metavar="A", help="positions a (mm) to tabulate")
+    p.add_argument("--a", type=float, nargs="+", action="extend", metavar="A",
+                   help="positions a (mm) to tabulate; repeat or list several")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=cmd_harmonic)
     return parser
 
 
+def _one_line(exc: OSError) -> str:
+    """``path: reason`` of an OS error, as one line."""
+    path = exc.filename if exc.filename is not None else "(unknown path)"
+    extra = f" -> {exc.filename2}" if exc.filename2 is not None else ""
+    return f"{path}{extra}: {exc.strerror or exc}"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    # --debug is accepted anywhere, before or after the sub-command
+    debug = "--debug" in argv
+    argv = [a for a in argv if a != "--debug"]
     parser = make_parser()
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: 0 for --help/--version, 2 for usage errors
         return int(exc.code or 0)
+    args.debug = debug
+
+    def on_sigterm(signum, frame):
+        raise Terminated(signum)
+
+    previous = None
+    try:
+        previous = signal.signal(signal.SIGTERM, on_sigterm)
+    except ValueError:  # not the main thread: leave signals alone
+        previous = None
+
+    def fail(code: int, message: str) -> int:
+        if debug:
+            raise
+        print(f"error: {message}", file=sys.stderr)
+        return code
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DesignWarning)
             return args.func(args)
-    except DesignError as exc:
-        if args.debug:
-            raise
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_INPUT
-    except (UsageError,) as exc:
-        if args.debug:
-            raise
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return EXIT_SIGINT
+    except Terminated:
+        print("interrupted", file=sys.stderr)
+        return EXIT_SIGTERM
+    except (DesignError, UsageError, OutputRefused, ResourceLimitError) as exc:
+        return fail(EXIT_INPUT, str(exc))
+    except EnvironmentFailure as exc:
+        return fail(EXIT_ENVIRONMENT, str(exc))
+    except OSError as exc:
+        return fail(EXIT_ENVIRONMENT, _one_line(exc))
+    except MemoryError:
+        return fail(EXIT_ENVIRONMENT, "out of memory (lower --memory-budget so that prs-geom refuses "
+                                      "such jobs up front, or coarsen mesh.chord_tolerance_mm)")
     except PRSGeomError as exc:
-        if args.debug:
-            raise
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_FOUND
+        return fail(EXIT_FOUND, str(exc))
+    except Exception as exc:  # a bug: one line, the traceback with --debug
+        return fail(EXIT_INTERNAL, f"internal error {type(exc).__name__}: {exc} (run with --debug for "
+                                   f"the traceback and please report it)")
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 def entry_point() -> None:

@@ -33,7 +33,7 @@ import warnings
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from .errors import DesignError, DesignWarning
+from .errors import DesignError, DesignWarning, format_value
 
 #: Installation types of DOMAIN.md section 4.
 INSTALLATIONS = ("tension-compression", "compression-compression")
@@ -79,7 +79,7 @@ def _integer(fld: str, value: Any, lo: int, hi: int) -> int:
 
 def _choice(fld: str, value: Any, options: tuple[str, ...]) -> str:
     if value not in options:
-        raise DesignError(fld, value, "must be one of " + ", ".join(repr(o) for o in options))
+        raise DesignError(fld, value, "must be one of " + ", ".join(format_value(o) for o in options))
     return value
 
 
@@ -336,12 +336,36 @@ class PRSDesign:
         self._resolve_defaults()
         self._check()
 
+    # -- errors ---------------------------------------------------------------
+    def _error(self, fld: str, value: Any, rule: str) -> DesignError:
+        """A :class:`DesignError` on ``fld``; when the user did not write that field, the
+        message says which default it took and from which fields."""
+        return DesignError(fld, value, rule, self.__dict__.get("_defaulted", {}).get(fld, ""))
+
     # -- defaults -------------------------------------------------------------
     def _resolve_defaults(self) -> None:
         p, beta = self.thread.pitch_mm, self.thread.beta
         half_depth = p / (4.0 * math.tan(beta))
         add, ded = DEFAULT_ADDENDUM_FACTOR * half_depth, DEFAULT_DEDENDUM_FACTOR * half_depth
         n = self.thread.engaged_teeth
+        h_from = "H = thread.pitch_mm / (4 tan thread.flank_half_angle_deg)"
+        notes = {
+            "screw.major_diameter_mm": f"screw.pitch_diameter_mm + 1.2 H, {h_from}",
+            "screw.minor_diameter_mm": f"screw.pitch_diameter_mm - 1.6 H, {h_from}",
+            "screw.length_mm": "(thread.engaged_teeth + 4) x thread.pitch_mm",
+            "roller.arc_radius_mm": "roller.pitch_diameter_mm / (2 sin thread.flank_half_angle_deg)",
+            "roller.major_diameter_mm": f"roller.pitch_diameter_mm + 1.2 H, {h_from}",
+            "roller.minor_diameter_mm": f"roller.pitch_diameter_mm - 1.6 H, {h_from}",
+            "nut.major_diameter_mm": f"nut.pitch_diameter_mm + 1.6 H, {h_from}",
+            "nut.minor_diameter_mm": f"nut.pitch_diameter_mm - 1.2 H, {h_from}",
+        }
+        defaulted = {}
+        for path, how in notes.items():
+            part, key = path.split(".")
+            if getattr(getattr(self, part), key) is None:
+                defaulted[path] = f"not in the design file: the default {how}"
+        # not a dataclass field: derived bookkeeping, ignored by equality and I/O
+        _set(self, "_defaulted", defaulted)
 
         s = self.screw
         _set(self, "screw", replace(
@@ -373,12 +397,12 @@ class PRSDesign:
         s, r, u = self.screw, self.roller, self.nut
         for part, spec in (("screw", s), ("roller", r), ("nut", u)):
             if not spec.minor_diameter_mm < spec.pitch_diameter_mm < spec.major_diameter_mm:
-                raise DesignError(f"{part}.pitch_diameter_mm", spec.pitch_diameter_mm,
+                raise self._error(f"{part}.pitch_diameter_mm", spec.pitch_diameter_mm,
                                   f"must lie strictly between {part}.minor_diameter_mm "
                                   f"({spec.minor_diameter_mm}) and {part}.major_diameter_mm "
                                   f"({spec.major_diameter_mm})")
         if r.arc_radius_mm <= 0.5 * r.major_diameter_mm:
-            raise DesignError("roller.arc_radius_mm", r.arc_radius_mm,
+            raise self._error("roller.arc_radius_mm", r.arc_radius_mm,
                               f"must exceed the roller crest radius "
                               f"{0.5 * r.major_diameter_mm} (the flank arc is centred on the "
                               f"roller axis)")
@@ -388,53 +412,53 @@ class PRSDesign:
             crest_w, root_w = prof.tooth_half_width_at_crest(), prof.groove_half_width_at_root()
             if crest_w <= 0.0:
                 fld = f"{part}.minor_diameter_mm" if part == "nut" else f"{part}.major_diameter_mm"
-                raise DesignError(fld, getattr(getattr(self, part), fld.split(".")[1]),
+                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
                                   f"the tooth comes to a point below the crest (crest "
                                   f"half-width {crest_w:.4g} mm): reduce the crest height")
             if root_w <= 0.0:
                 fld = f"{part}.major_diameter_mm" if part == "nut" else f"{part}.minor_diameter_mm"
-                raise DesignError(fld, getattr(getattr(self, part), fld.split(".")[1]),
+                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
                                   f"the groove closes above the root (root half-width "
                                   f"{root_w:.4g} mm): make the root shallower")
         a = 0.5 * (s.pitch_diameter_mm + r.pitch_diameter_mm)
         if 0.5 * s.major_diameter_mm + 0.5 * r.minor_diameter_mm >= a:
-            raise DesignError("screw.major_diameter_mm", s.major_diameter_mm,
+            raise self._error("screw.major_diameter_mm", s.major_diameter_mm,
                               f"screw crest radius + roller root radius must be less than the "
                               f"centre distance {a} mm (crest would hit the roller root)")
         if 0.5 * r.major_diameter_mm + 0.5 * s.minor_diameter_mm >= a:
-            raise DesignError("roller.major_diameter_mm", r.major_diameter_mm,
+            raise self._error("roller.major_diameter_mm", r.major_diameter_mm,
                               f"roller crest radius + screw root radius must be less than the "
                               f"centre distance {a} mm (crest would hit the screw root)")
         if a + 0.5 * r.major_diameter_mm >= 0.5 * u.major_diameter_mm:
-            raise DesignError("nut.major_diameter_mm", u.major_diameter_mm,
+            raise self._error("nut.major_diameter_mm", u.major_diameter_mm,
                               f"nut root radius must exceed centre distance + roller crest "
                               f"radius = {a + 0.5 * r.major_diameter_mm} mm")
         if a + 0.5 * r.minor_diameter_mm >= 0.5 * u.minor_diameter_mm:
-            raise DesignError("nut.minor_diameter_mm", u.minor_diameter_mm,
+            raise self._error("nut.minor_diameter_mm", u.minor_diameter_mm,
                               f"nut crest radius must exceed centre distance + roller root "
                               f"radius = {a + 0.5 * r.minor_diameter_mm} mm")
         if u.outer_diameter_mm <= u.major_diameter_mm:
-            raise DesignError("nut.outer_diameter_mm", u.outer_diameter_mm,
+            raise self._error("nut.outer_diameter_mm", u.outer_diameter_mm,
                               f"must exceed nut.major_diameter_mm ({u.major_diameter_mm})")
         gap = 2.0 * a * math.sin(math.pi / r.count) if r.count > 1 else math.inf
         if gap <= r.major_diameter_mm:
-            raise DesignError("roller.count", r.count,
+            raise self._error("roller.count", r.count,
                               f"{r.count} rollers on a {a} mm centre radius overlap: roller "
                               f"centre spacing {gap:.4g} mm must exceed the roller crest "
                               f"diameter {r.major_diameter_mm} mm")
         if s.length_mm < n * p:
-            raise DesignError("screw.length_mm", s.length_mm,
+            raise self._error("screw.length_mm", s.length_mm,
                               f"must be at least the engaged length n p = {n * p} mm")
         for part, spec in (("roller", r), ("nut", u)):
             lst = spec.pitch_list_mm
             if lst is None:
                 continue
             if len(lst) != n - 1:
-                raise DesignError(f"{part}.pitch_list_mm", list(lst),
+                raise self._error(f"{part}.pitch_list_mm", list(lst),
                                   f"must have engaged_teeth - 1 = {n - 1} entries, has {len(lst)}")
             for k, pj in enumerate(lst):
                 if abs(pj - p) > MAX_PITCH_DEVIATION * p:
-                    raise DesignError(f"{part}.pitch_list_mm[{k}]", pj,
+                    raise self._error(f"{part}.pitch_list_mm[{k}]", pj,
                                       f"must be within {MAX_PITCH_DEVIATION:.0%} of the pitch "
                                       f"{p} mm (graded-pitch corrections are micrometres)")
 

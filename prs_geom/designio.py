@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from .design import Materials, PRSDesign
-from .errors import DesignError
+from .errors import DesignError, EnvironmentFailure
 
 #: Comments written by ``prs-geom init`` above each key (unit and meaning).
 FIELD_COMMENTS: dict[str, str] = {
@@ -53,6 +53,7 @@ FIELD_COMMENTS: dict[str, str] = {
     "contact.precision_mm": "precision of that clearance (mm)",
     "mesh.chord_tolerance_mm": "largest mesh deviation from the analytic surface (mm)",
     "kind": '"prs" (default) or "harmonic"',
+    "format_version": "design-file format version (files without it are version 1)",
     "flexspline.neutral_radius_mm": "flexspline neutral-layer radius r0 (mm)",
     "flexspline.length_mm": "flexspline length L from the bottom (mm)",
     "flexspline.arc_radius_mm": "contact arc radius r_s (mm)",
@@ -123,6 +124,21 @@ def _nested_type(cls: type, key: str) -> type | None:
 
 #: Top-level ``kind`` of a design file: a PRS (default) or a harmonic friction drive.
 KINDS = ("prs", "harmonic")
+#: Version of the design-file format this prs_geom writes. Files without the key are the
+#: first format (version 1, identical keys); a newer version is refused with a message.
+DESIGN_FORMAT_VERSION = 1
+
+
+def check_format_version(value: Any, what: str = "design file") -> int:
+    """The ``format_version`` of a file this prs_geom can read, else a :class:`DesignError`."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise DesignError("format_version", value, "must be a whole number >= 1")
+    if value > DESIGN_FORMAT_VERSION:
+        from . import __version__
+        raise DesignError("format_version", value,
+                          f"this {what} was written by a newer prs-geom; prs_geom {__version__} reads "
+                          f"format versions 1 to {DESIGN_FORMAT_VERSION}: upgrade prs-geom")
+    return value
 
 
 def design_from_dict(data: dict[str, Any]):
@@ -131,11 +147,15 @@ def design_from_dict(data: dict[str, Any]):
     dotted field)."""
     from .harmonic import HarmonicDesign
 
-    if isinstance(data, dict) and "kind" in data:
-        data = dict(data)
+    if not isinstance(data, dict):
+        raise DesignError("design", data, "must be a table of keys (name, thread, screw, ...)")
+    data = dict(data)
+    if "format_version" in data:
+        check_format_version(data.pop("format_version"))
+    if "kind" in data:
         kind = data.pop("kind")
         if kind not in KINDS:
-            raise DesignError("kind", kind, "must be one of " + ", ".join(repr(k) for k in KINDS))
+            raise DesignError("kind", kind, "must be one of " + ", ".join(f'"{k}"' for k in KINDS))
         if kind == "harmonic":
             return _build(HarmonicDesign, data, "")
     return _build(PRSDesign, data, "")
@@ -175,9 +195,9 @@ def dumps_toml(design, comments: bool = True, header: str | None = None) -> str:
     """TOML text of a design that :func:`loads_toml` reads back to an equal object."""
     from .harmonic import HarmonicDesign
 
-    data = design_to_dict(design)
+    data = {"format_version": DESIGN_FORMAT_VERSION, **design_to_dict(design)}
     if isinstance(design, HarmonicDesign):
-        data = {"kind": "harmonic", **data}
+        data = {"format_version": DESIGN_FORMAT_VERSION, "kind": "harmonic", **design_to_dict(design)}
     lines: list[str] = []
     if header:
         lines += [f"# {h}" if h else "#" for h in header.splitlines()] + [""]
@@ -202,11 +222,12 @@ def dumps_toml(design, comments: bool = True, header: str | None = None) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
-def loads_toml(text: str) -> PRSDesign:
+def loads_toml(text: str, source: str = "<text>") -> PRSDesign:
+    """A design from TOML text; ``source`` names the file in error messages."""
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as exc:
-        raise DesignError("<file>", "TOML", f"is not valid TOML: {exc}") from None
+        raise DesignError.about_file(source, f"is not valid TOML: {exc}") from None
     return design_from_dict(data)
 
 
@@ -214,35 +235,78 @@ def loads_toml(text: str) -> PRSDesign:
 def dumps_json(design) -> str:
     from .harmonic import HarmonicDesign
 
-    data = design_to_dict(design)
+    data = {"format_version": DESIGN_FORMAT_VERSION, **design_to_dict(design)}
     if isinstance(design, HarmonicDesign):
-        data = {"kind": "harmonic", **data}
+        data = {"format_version": DESIGN_FORMAT_VERSION, "kind": "harmonic", **design_to_dict(design)}
     return json.dumps(data, indent=2) + "\n"
 
 
-def loads_json(text: str) -> PRSDesign:
+def loads_json(text: str, source: str = "<text>") -> PRSDesign:
+    """A design from JSON text; ``source`` names the file in error messages."""
     try:
-        data = json.loads(text)
+        data = json.loads(text.removeprefix("\ufeff"))
     except json.JSONDecodeError as exc:
-        raise DesignError("<file>", "JSON", f"is not valid JSON: {exc}") from None
+        raise DesignError.about_file(source, f"is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise DesignError.about_file(source, "is nested too deeply to be a design file") from None
     return design_from_dict(data)
+
+
+def decode_text(raw: bytes, source: str) -> str:
+    """UTF-8 text of a design file, with or without a byte-order mark.
+
+    Any other encoding is a :class:`DesignError` naming the file and the byte offset of the
+    first byte that is not UTF-8 (UTF-16 and UTF-32 files are recognised by their mark).
+    """
+    for bom, name in ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"),
+                      (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16")):
+        if raw.startswith(bom):
+            raise DesignError.about_file(source, f"is not UTF-8: it starts with a {name} byte-order "
+                                                 f"mark; save it as UTF-8")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DesignError.about_file(source, f"is not UTF-8 text: byte 0x{raw[exc.start]:02x} at byte "
+                                             f"offset {exc.start}; save it as UTF-8") from None
+    if "\x00" in text:
+        raise DesignError.about_file(source, f"is not text: NUL byte at byte offset {raw.index(0)}")
+    return text.removeprefix("\ufeff")
 
 
 # --------------------------------------------------------------------------- files
 def load_design(path: str | Path) -> PRSDesign:
-    """Read a design from a ``.toml`` or ``.json`` file."""
+    """Read a design from a ``.toml`` or ``.json`` file (UTF-8, with or without BOM).
+
+    A file that does not exist or is a folder is a :class:`DesignError` (bad input, exit 2);
+    a file that exists but cannot be read is an :class:`EnvironmentFailure` (exit 3).
+    """
     path = Path(path)
+    source = str(path)
+    if not path.exists():
+        raise DesignError("design file", str(path), "does not exist")
+    if path.is_dir():
+        raise DesignError("design file", str(path), "is a folder, not a design file")
     try:
-        text = path.read_text(encoding="utf-8")
+        raw = path.read_bytes()
     except OSError as exc:
-        raise DesignError("<file>", str(path), f"cannot be read: {exc.strerror}") from None
+        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
+    text = decode_text(raw, source)
     if path.suffix.lower() == ".json":
-        return loads_json(text)
-    return loads_toml(text)
+        return loads_json(text, source)
+    return loads_toml(text, source)
 
 
-def save_design(design: PRSDesign, path: str | Path) -> None:
-    """Write a design as TOML (``.toml``) or JSON (``.json``)."""
-    path = Path(path)
+def save_design(design: PRSDesign, path: str | Path, overwrite: bool = False) -> None:
+    """Write a design as TOML (``.toml``) or JSON (``.json``), atomically.
+
+    An existing file is refused (:class:`~prs_geom.output.OutputRefused`) unless
+    ``overwrite``.
+    """
+    from .output import check_output_file, write_file_atomic
+
+    path = check_output_file(path, force=overwrite)
     text = dumps_json(design) if path.suffix.lower() == ".json" else dumps_toml(design)
-    path.write_text(text, encoding="utf-8")
+    try:
+        write_file_atomic(path, text)
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot write {path}: {exc.strerror or exc}") from None

@@ -20,10 +20,14 @@ from . import __version__
 from .assembly import carrier_angles, roller_spin
 from .design import PRSDesign
 from .designio import design_to_dict, dumps_toml
+from .errors import EnvironmentFailure
 from .output import AtomicOutputDir
 from .progress import ProgressFn, silent
 
 REPORT_NAME = "report.json"
+#: Version of the report.json layout (``format_version``); the JSON Schema
+#: ``prs_geom/schemas/report.schema.json`` describes it.
+REPORT_FORMAT_VERSION = 1
 
 
 @dataclass
@@ -137,6 +141,7 @@ def stage_checks(ctx: BuildContext) -> None:
     corrected = interference(ctx.design, "corrected", progress=ctx.progress)
     corrected["nominal_screw"] = interference(ctx.design, "nominal", progress=ctx.progress)
     ctx.report["checks"]["interference"] = corrected
+    ctx.report["warnings"] += check_warnings(ctx.report)
 
 
 def stage_manufacturing(ctx: BuildContext) -> None:
@@ -182,9 +187,11 @@ def new_report(design) -> dict[str, Any]:
     from .harmonic import HarmonicDesign
 
     if isinstance(design, HarmonicDesign):
-        return {"prs_geom_version": __version__, "kind": "harmonic", "design": design_to_dict(design),
-                "warnings": [], "harmonic": None, "checks": {}, "timings_s": {}, "files": []}
+        return {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
+                "design": design_to_dict(design), "warnings": [], "harmonic": None, "checks": {},
+                "timings_s": {}, "files": []}
     return {
+        "format_version": REPORT_FORMAT_VERSION,
         "prs_geom_version": __version__,
         "design": design_to_dict(design),
         "warnings": design.sizing_warnings(),
@@ -196,6 +203,18 @@ def new_report(design) -> dict[str, Any]:
         "timings_s": {},
         "files": [],
     }
+
+
+def check_warnings(report: dict[str, Any]) -> list[str]:
+    """Every check whose measured difference exceeds its documented tolerance, as one line
+    each: the ``warnings`` lists of the mesh checks and of the FCL verification."""
+    out = []
+    checks = report.get("checks") or {}
+    for row in checks.get("meshes") or []:
+        out += [f"mesh check ({row['part']}): {w}" for w in row.get("warnings", [])]
+    fcl_check = checks.get("fcl") or {}
+    out += [f"FCL check: {w}" for w in fcl_check.get("warnings", [])]
+    return out
 
 
 def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
@@ -229,11 +248,15 @@ def harmonic_stage(ctx: BuildContext) -> None:
             ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
         ctx.add_file(f"{name}.stl").write_bytes(trimesh.exchange.stl.export_stl(mesh))
         rev = revolve_deviation(mesh, prof)
+        dev = rev + arc_bound
         rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
                      "volume_mm3": float(mesh.volume), "chord_tolerance_mm": tol,
                      "revolution_deviation_mm": rev, "arc_chord_bound_mm": arc_bound,
-                     "max_deviation_mm": rev + arc_bound})
+                     "max_deviation_mm": dev,
+                     "warnings": [f"measured deviation {dev:.3g} mm exceeds the chord tolerance {tol:g} mm"]
+                     if dev > tol else []})
     ctx.report["checks"]["meshes"] = rows
+    ctx.report["warnings"] += check_warnings(ctx.report)
 
 
 HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
@@ -242,17 +265,39 @@ HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
 ]
 
 
-def build(design, out_dir: str | Path, progress: ProgressFn = silent) -> dict[str, Any]:
+def _environment_failure(exc: OSError, atomic: AtomicOutputDir) -> EnvironmentFailure:
+    """One line naming the path (as the user will know it, not the temporary folder) and
+    the operating system's reason."""
+    path = str(exc.filename) if exc.filename is not None else str(atomic.target)
+    if atomic.tmp is not None:
+        path = path.replace(str(atomic.tmp), str(atomic.target))
+    return EnvironmentFailure(f"cannot write {path}: {exc.strerror or exc} (nothing was written; "
+                              f"{atomic.given} is as it was)")
+
+
+def build(design, out_dir: str | Path, progress: ProgressFn = silent,
+          memory_budget: int | None = None) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``.
 
-    Written atomically: if any stage fails, ``out_dir`` keeps its previous content.
-    Returns the report dict.
+    ``out_dir`` must be a new path, an empty folder or an earlier prs-geom output folder
+    (:mod:`prs_geom.output`; anything else raises :class:`~prs_geom.output.OutputRefused`
+    before any work). The job is refused up front when its estimated memory exceeds
+    ``memory_budget`` (bytes; default a share of the available memory,
+    :mod:`prs_geom.resources`). Written atomically: if any stage fails, ``out_dir`` keeps
+    its previous content. Returns the report dict.
     """
     from .harmonic import HarmonicDesign
+    from .resources import guard
 
     harmonic = isinstance(design, HarmonicDesign)
-    with AtomicOutputDir(out_dir) as tmp:
-        ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None)
-        ctx.report["files"].append(REPORT_NAME)
-        (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+    atomic = AtomicOutputDir(out_dir, {"design": design.name})
+    if not harmonic:
+        guard(design, memory_budget)
+    try:
+        with atomic as tmp:
+            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None)
+            ctx.report["files"].append(REPORT_NAME)
+            (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise _environment_failure(exc, atomic) from exc
     return ctx.report

@@ -172,15 +172,18 @@ def test_failing_build_leaves_earlier_output_unchanged(tmp_path, monkeypatch):
         raise RuntimeError("simulated failure in a late stage")
 
     monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + [("boom", boom)])
+    code, _, err = run(["build", "--out", str(out), "--quiet"])
+    # an unexpected exception is an internal error: one line, exit 70, no traceback
+    assert code == 70 and "internal error RuntimeError: simulated failure" in err and "Traceback" not in err
     with pytest.raises(RuntimeError):
-        run(["build", "--out", str(out), "--quiet"])
+        run(["--debug", "build", "--out", str(out), "--quiet"])
     after = {p.name: p.read_bytes() for p in out.iterdir()}
     assert after == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
 def test_help_of_every_subcommand():
-    for name in ("init", "build", "contact", "loads", "design-pitch", "check", "harmonic"):
+    for name in ("init", "validate", "build", "contact", "loads", "design-pitch", "check", "harmonic"):
         code, out, _ = run([name, "--help"])
         assert code == 0 and "usage: prs-geom " + name in out
 

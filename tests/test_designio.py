@@ -59,7 +59,7 @@ def test_init_then_build_round_trips(tmp_path):
     ("[materials.nut]\npoisson_ratio = 0.7\n", "materials.nut.poisson_ratio"),
     ("[roller]\ncolour = 3\n", "roller.colour"),
     ("thread = 3\n", "thread"),
-    ("[thread\n", "<file>"),
+    ("[thread\n", "design file '<text>'"),
 ])
 def test_errors_name_the_dotted_field(text, field):
     with pytest.raises(DesignError) as exc:

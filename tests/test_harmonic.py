@@ -131,7 +131,10 @@ def test_harmonic_cli(tmp_path):
     rep = json.loads(out)
     assert rep["alpha_deg"] == pytest.approx(4.5739, abs=1e-4) and len(rep["table"]) == 65
     code, _, err = run(["harmonic", "--a", "90"])
-    assert code == 2 and err.startswith("error: --a[0]")
+    assert code == 2 and err.startswith("error: --a (value 1) = 90.0: must lie in positions.min_mm")
+    # repeated flags add up (they used to keep only the last)
+    code, out, _ = run(["harmonic", "--a", "42", "--a", "73"])
+    assert code == 0 and "19.5" in out and "545.0" in out
     bad = tmp_path / "bad.toml"
     bad.write_text('kind = "harmonic"\n[circular_spline]\nbore_length_mm = -1\n')
     code, _, err = run(["harmonic", str(bad)])

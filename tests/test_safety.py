@@ -1,0 +1,315 @@
+"""Issue 11: never lose a user's files; hold up at every documented limit.
+
+Each test reproduces one report of "What was seen" and checks the fixed behaviour.
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from cli_helpers import run
+from prs_geom.design import MeshSettings, PRSDesign, Roller, Thread
+from prs_geom.designio import dumps_toml, save_design
+from prs_geom.output import MANIFEST_NAME, AtomicOutputDir, OutputRefused, clean_stale
+
+#: A design that builds in a few seconds (3 teeth, 3 rollers, coarse mesh).
+TINY = PRSDesign(name="tiny", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
+                 mesh=MeshSettings(chord_tolerance_mm=0.05))
+BUDGET = ["--memory-budget", "4G"]
+
+
+def tree(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture()
+def tiny_file(tmp_path) -> Path:
+    path = tmp_path / "tiny.toml"
+    save_design(TINY, path)
+    return path
+
+
+# --------------------------------------------------------------------------- output folders
+def test_folder_with_a_user_file_is_refused_and_kept(tmp_path, tiny_file):
+    user = tmp_path / "thesis"
+    user.mkdir()
+    (user / "chapter1.docx").write_bytes(b"years of work")
+    (user / "data").mkdir()
+    (user / "data" / "results.csv").write_text("1,2,3\n")
+    before = tree(user)
+    code, out, err = run(["build", str(tiny_file), "--out", str(user), "--quiet", *BUDGET])
+    assert code == 2 and out == ""
+    assert f"'{user}'" in err and "chapter1.docx" in err and "Nothing was touched" in err
+    assert tree(user) == before
+    # no temporary folder was left beside it either
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis", "tiny.toml"]
+
+
+def test_out_dot_never_deletes_anything(tmp_path, tiny_file, monkeypatch):
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "notes.txt").write_text("mine")
+    monkeypatch.chdir(work)
+    for target in (".", str(work), str(tmp_path)):
+        code, _, err = run(["build", str(tiny_file), "--out", target, "--quiet", *BUDGET])
+        assert code == 2 and "current folder" in err
+    assert (work / "notes.txt").read_text() == "mine"
+    # an empty current folder is refused too: replacing it would strand the shell
+    (work / "notes.txt").unlink()
+    code, _, err = run(["build", str(tiny_file), "--out", ".", "--quiet", *BUDGET])
+    assert code == 2 and work.is_dir() and list(work.iterdir()) == []
+
+
+def test_existing_file_as_out_is_refused(tmp_path, tiny_file):
+    f = tmp_path / "report.pdf"
+    f.write_bytes(b"%PDF user file")
+    code, _, err = run(["build", str(tiny_file), "--out", str(f), "--quiet", *BUDGET])
+    assert code == 2 and "is an existing file" in err
+    assert f.read_bytes() == b"%PDF user file"
+
+
+def test_own_output_is_replaced_atomically_and_foreign_files_refused(tmp_path, tiny_file):
+    out = tmp_path / "out"
+    assert run(["build", str(tiny_file), "--out", str(out), "--quiet", *BUDGET])[0] == 0
+    manifest = json.loads((out / MANIFEST_NAME).read_text())
+    assert manifest["written_by"] == "prs-geom" and manifest["complete"] is True
+    on_disk = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert sorted(manifest["files"] + [MANIFEST_NAME]) == on_disk
+    assert "report.json" in manifest["files"]
+    # our own folder: rebuilt in place
+    assert run(["build", str(tiny_file), "--out", str(out), "--quiet", *BUDGET])[0] == 0
+    # a user file dropped into it, and an office lock file: refused, both named
+    (out / "my-notes.txt").write_text("keep")
+    (out / "~$machining.xlsx").write_bytes(b"lock")
+    before = tree(out)
+    code, _, err = run(["build", str(tiny_file), "--out", str(out), "--quiet", *BUDGET])
+    assert code == 2 and "my-notes.txt" in err and "~$machining.xlsx (lock file" in err
+    assert tree(out) == before
+
+
+def test_init_and_design_pitch_refuse_to_overwrite_without_force(tmp_path, tiny_file):
+    target = tmp_path / "mine.toml"
+    target.write_text("# my own design\n")
+    code, _, err = run(["init", "--out", str(target)])
+    assert code == 2 and "already exists" in err and "--force" in err
+    assert target.read_text() == "# my own design\n"
+    code, _, err = run(["design-pitch", str(tiny_file), "--out", str(target)])
+    assert code == 2 and target.read_text() == "# my own design\n"
+    assert run(["init", "--out", str(target), "--force"])[0] == 0
+    assert "[thread]" in target.read_text()
+    lock = tmp_path / ".~lock.graded.toml#"
+    code, _, err = run(["init", "--out", str(lock)])
+    assert code == 2 and "lock file" in err and not lock.exists()
+
+
+def test_stale_temporary_folders_of_dead_processes_are_cleaned(tmp_path):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = tmp_path / f".out.tmp-{dead.pid}-0123abcd"
+    stale.mkdir()
+    (stale / MANIFEST_NAME).write_text(json.dumps({"written_by": "prs-geom", "files": []}))
+    (stale / "screw.stl").write_bytes(b"half")
+    # a folder that looks alike but is not ours stays
+    foreign = tmp_path / f".notes.tmp-{dead.pid}-89abcdef"
+    foreign.mkdir()
+    # set aside before a crash, its target missing: put back
+    old = tmp_path / f".prev.old-{dead.pid}-00ff00ff"
+    old.mkdir()
+    (old / MANIFEST_NAME).write_text(json.dumps({"written_by": "prs-geom", "files": ["a.txt"]}))
+    (old / "a.txt").write_text("previous output")
+    done = clean_stale(tmp_path)
+    assert not stale.exists() and foreign.is_dir()
+    assert (tmp_path / "prev" / "a.txt").read_text() == "previous output"
+    assert len(done) == 2
+    # a live process's folder is left alone
+    live = tmp_path / f".out.tmp-{os.getpid()}-0123abcd"
+    live.mkdir()
+    (live / MANIFEST_NAME).write_text(json.dumps({"written_by": "prs-geom", "files": []}))
+    assert clean_stale(tmp_path) == [] and live.is_dir()
+
+
+def _start_build(tiny_file: Path, out: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "prs_geom.cli", "build", str(tiny_file), "--out", str(out),
+                             *BUDGET], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for_temp(parent: Path, proc: subprocess.Popen, timeout: float = 60.0) -> Path:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < timeout:
+        temps = [p for p in parent.iterdir() if ".tmp-" in p.name and (p / MANIFEST_NAME).exists()]
+        if temps:
+            return temps[0]
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.02)
+    raise AssertionError("no temporary folder appeared")
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_interrupt_removes_the_temporary_folder_and_prints_one_line(tmp_path, tiny_file, sig, code):
+    out = tmp_path / "out"
+    proc = _start_build(tiny_file, out)
+    temp = _wait_for_temp(tmp_path, proc)
+    proc.send_signal(sig)
+    stdout, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == code
+    assert stderr.strip().splitlines()[-1] == "interrupted" and "Traceback" not in stderr
+    assert not temp.exists() and not out.exists()
+
+
+def test_sigkill_leftovers_are_cleaned_by_the_next_run(tmp_path, tiny_file):
+    out = tmp_path / "out"
+    proc = _start_build(tiny_file, out)
+    temp = _wait_for_temp(tmp_path, proc)
+    proc.kill()
+    proc.communicate()
+    assert temp.exists()          # nothing can clean up after SIGKILL ...
+    code, _, _ = run(["build", str(tiny_file), "--out", str(out), "--quiet", *BUDGET])
+    assert code == 0 and not temp.exists()   # ... but the next run does
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "tiny.toml"]
+
+
+def test_atomic_dir_keeps_target_on_error(tmp_path):
+    target = tmp_path / "t"
+    with AtomicOutputDir(target) as tmp:
+        (tmp / "a.txt").write_text("one")
+    with pytest.raises(KeyboardInterrupt):
+        with AtomicOutputDir(target) as tmp:
+            (tmp / "a.txt").write_text("two")
+            raise KeyboardInterrupt
+    assert (target / "a.txt").read_text() == "one"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t"]
+    (target / "b.txt").write_text("user")
+    with pytest.raises(OutputRefused):
+        AtomicOutputDir(target)
+
+
+# --------------------------------------------------------------------------- environment failures
+def _mount_tmpfs(path: Path, options: str) -> bool:
+    path.mkdir(parents=True, exist_ok=True)
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(path)], capture_output=True)
+    return r.returncode == 0
+
+
+def test_disk_full_is_one_line_with_path_and_reason(tmp_path, tiny_file):
+    disk = tmp_path / "small-disk"
+    if not _mount_tmpfs(disk, "size=300k"):
+        pytest.skip("cannot mount a small tmpfs here (needs root)")
+    try:
+        code, _, err = run(["build", str(tiny_file), "--out", str(disk / "out"), "--quiet", *BUDGET])
+        assert code == 3 and "No space left on device" in err and str(disk) in err
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+        assert list(disk.iterdir()) == []     # the temporary folder went too
+    finally:
+        subprocess.run(["umount", str(disk)])
+
+
+def test_unwritable_output_is_one_line_with_path_and_reason(tmp_path, tiny_file):
+    ro = tmp_path / "read-only"
+    if not _mount_tmpfs(ro, "ro,size=100k"):
+        pytest.skip("cannot mount a read-only tmpfs here (needs root)")
+    try:
+        code, _, err = run(["build", str(tiny_file), "--out", str(ro / "out"), "--quiet", *BUDGET])
+        assert code == 3 and "Read-only file system" in err and str(ro) in err
+        assert "Traceback" not in err
+    finally:
+        subprocess.run(["umount", str(ro)])
+    code, _, err = run(["init", "--out", "/proc/no-such-folder/design.toml"])
+    assert code == 3 and "/proc/no-such-folder" in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- input
+def test_utf8_with_bom_is_accepted(tmp_path):
+    f = tmp_path / "bom.toml"
+    f.write_bytes(b"\xef\xbb\xbf" + dumps_toml(TINY).encode())
+    code, out, _ = run(["validate", str(f)])
+    assert code == 0 and "design tiny is valid" in out
+    j = tmp_path / "bom.json"
+    j.write_bytes(b'\xef\xbb\xbf{"name": "bomjson"}')
+    assert run(["validate", str(j)])[0] == 0
+
+
+@pytest.mark.parametrize("raw, expect", [
+    (b'name = "caf\xe9"\n', "byte 0xe9 at byte offset 11"),
+    (b"\xff\xfen\x00a\x00", "UTF-16 byte-order mark"),
+    (b'name = "x"\n\x00\x01\x02', "NUL byte at byte offset 11"),
+])
+def test_other_encodings_name_the_file_and_offset(tmp_path, raw, expect):
+    f = tmp_path / "latin1.toml"
+    f.write_bytes(raw)
+    code, _, err = run(["build", str(f), "--out", str(tmp_path / "o"), *BUDGET])
+    assert code == 2 and str(f) in err and expect in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
+
+
+# --------------------------------------------------------------------------- resource guard
+def test_huge_screw_is_refused_up_front_naming_the_field(tmp_path):
+    f = tmp_path / "long.toml"
+    f.write_text("[screw]\nlength_mm = 1e6\n")
+    t0 = time.monotonic()
+    code, _, err = run(["build", str(f), "--out", str(tmp_path / "o"), "--memory-budget", "8G"])
+    assert code == 2 and time.monotonic() - t0 < 10
+    assert "screw.length_mm = 1000000.0" in err and "estimated peak memory" in err and "8.0 GB" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_tiny_chord_tolerance_is_refused_against_a_small_budget(tmp_path):
+    f = tmp_path / "fine.toml"
+    f.write_text("[thread]\nengaged_teeth = 200\n[mesh]\nchord_tolerance_mm = 0.0001\n")
+    code, _, err = run(["check", str(f), "--memory-budget", "2G"])
+    assert code == 2 and "mesh.chord_tolerance_mm = 0.0001" in err and "thread.engaged_teeth = 200" in err
+    code, _, err = run(["build", str(f), "--memory-budget", "lots"])
+    assert code == 2 and err.startswith("error: --memory-budget = \"lots\"")
+
+
+def test_estimate_matches_built_meshes_and_bounds_memory():
+    from prs_geom.assembly import build_part
+    from prs_geom.resources import estimate, part_triangles
+
+    for d in (TINY, PRSDesign(thread=Thread(engaged_teeth=8, flank_half_angle_deg=35.0))):
+        est = part_triangles(d, d.mesh.chord_tolerance_mm)
+        for part in ("screw", "roller", "nut"):
+            actual = len(build_part(d, part).faces)
+            assert abs(est[part] - actual) <= 0.03 * actual, (part, est[part], actual)
+    # the default build peaks at about 370 MB (measured with ru_maxrss); the estimate bounds it
+    e = estimate(PRSDesign())
+    assert 370 * 2 ** 20 <= e.peak_bytes <= 2 * 370 * 2 ** 20
+
+
+# --------------------------------------------------------------------------- messages
+@pytest.mark.parametrize("text, expect", [
+    # a bad list item names the field with its index
+    ('[roller]\npitch_list_mm = [2.0, 2.0, "a"]\n', 'roller.pitch_list_mm[2] = "a": must be a number'),
+    # a rule on a derived default names the user's fields it came from
+    ("[roller]\npitch_diameter_mm = 12\n",
+     "nut.major_diameter_mm = 40.8 (not in the design file: the default nut.pitch_diameter_mm + 1.6 H"),
+    ('[thread]\nhand = "up"\n', 'thread.hand = "up": must be one of "right", "left"'),
+    ("[loading]\naxial_load_n = -5\n", "loading.axial_load_n = -5: must be > 0"),
+    ("format_version = 99\n", "format_version = 99: this design file was written by a newer prs-geom"),
+])
+def test_messages_name_what_the_user_wrote(tmp_path, text, expect):
+    f = tmp_path / "d.toml"
+    f.write_text(text)
+    code, _, err = run(["validate", str(f)])
+    assert code == 2 and expect in err, err
+    assert "np.float64" not in err and "Traceback" not in err
+
+
+def test_cli_flags_are_reported_under_their_own_name(tmp_path):
+    code, _, err = run(["loads", "--load", "-1"])
+    assert code == 2 and err.startswith("error: --load = -1.0")
+    code, _, err = run(["loads", "--load", "nan"])
+    assert code == 2 and err.startswith("error: --load = nan") and "axial_load_n" not in err
+
+
+def test_debug_is_accepted_after_the_subcommand(tmp_path):
+    code, _, err = run(["validate", str(tmp_path / "missing.toml")])
+    assert code == 2 and "does not exist" in err and "Traceback" not in err
+    with pytest.raises(Exception, match="does not exist"):
+        run(["validate", str(tmp_path / "missing.toml"), "--debug"])
