@@ -99,15 +99,13 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from .resources import estimate, format_bytes
+    from .resources import estimate
 
     design = _load_any(args.design)
     _warn(design)
     if isinstance(design, PRSDesign):
         est = estimate(design)
-        print(f"design {design.name} is valid; a build meshes {est.export_triangles / 1e6:.2f} M "
-              f"triangles (check {est.check_triangles / 1e6:.2f} M), estimated peak memory "
-              f"{format_bytes(est.peak_bytes)}")
+        print(f"design {design.name} is valid; a build meshes {est.describe()}")
     else:
         print(f"design {design.name} (harmonic) is valid")
     return EXIT_OK

@@ -83,8 +83,26 @@ def _choice(fld: str, value: Any, options: tuple[str, ...]) -> str:
     return value
 
 
+#: Largest accepted size (mm) of a diameter, radius or pitch: a sanity bound, since a
+#: value above 10 m is a unit mistake (lengths are in mm), and the geometry code needs
+#: finite, representable sizes. Lengths along the axis are bounded by the memory guard.
+MAX_SIZE_MM = 1e4
+
+
+def _size(fld: str, value: Any) -> float:
+    """A positive size in mm, at most :data:`MAX_SIZE_MM`."""
+    v = _positive(fld, value)
+    if v > MAX_SIZE_MM:
+        raise DesignError(fld, value, f"must be at most {MAX_SIZE_MM:g} mm (10 m; sizes are in mm)")
+    return v
+
+
 def _optional_positive(fld: str, value: Any) -> float | None:
     return None if value is None else _positive(fld, value)
+
+
+def _optional_size(fld: str, value: Any) -> float | None:
+    return None if value is None else _size(fld, value)
 
 
 def _pitch_list(fld: str, value: Any) -> tuple[float, ...] | None:
@@ -139,7 +157,7 @@ class Thread:
     engaged_teeth: int = 20
 
     def __post_init__(self) -> None:
-        _set(self, "pitch_mm", _positive("pitch_mm", self.pitch_mm))
+        _set(self, "pitch_mm", _size("pitch_mm", self.pitch_mm))
         beta = _real("flank_half_angle_deg", self.flank_half_angle_deg)
         if not 10.0 <= beta <= 80.0:
             raise DesignError("flank_half_angle_deg", self.flank_half_angle_deg,
@@ -175,10 +193,11 @@ class Screw:
     length_mm: float | None = None
 
     def __post_init__(self) -> None:
-        _set(self, "pitch_diameter_mm", _positive("pitch_diameter_mm", self.pitch_diameter_mm))
+        _set(self, "pitch_diameter_mm", _size("pitch_diameter_mm", self.pitch_diameter_mm))
         _integer("starts", self.starts, 1, 20)
-        for name in ("major_diameter_mm", "minor_diameter_mm", "length_mm"):
-            _set(self, name, _optional_positive(name, getattr(self, name)))
+        for name in ("major_diameter_mm", "minor_diameter_mm"):
+            _set(self, name, _optional_size(name, getattr(self, name)))
+        _set(self, "length_mm", _optional_positive("length_mm", self.length_mm))
 
 
 @dataclass(frozen=True)
@@ -198,10 +217,10 @@ class Roller:
     pitch_list_mm: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        _set(self, "pitch_diameter_mm", _positive("pitch_diameter_mm", self.pitch_diameter_mm))
+        _set(self, "pitch_diameter_mm", _size("pitch_diameter_mm", self.pitch_diameter_mm))
         _integer("count", self.count, 1, 60)
         for name in ("arc_radius_mm", "major_diameter_mm", "minor_diameter_mm"):
-            _set(self, name, _optional_positive(name, getattr(self, name)))
+            _set(self, name, _optional_size(name, getattr(self, name)))
         _set(self, "pitch_list_mm", _pitch_list("pitch_list_mm", self.pitch_list_mm))
 
 
@@ -221,11 +240,11 @@ class Nut:
     pitch_list_mm: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        _set(self, "pitch_diameter_mm", _positive("pitch_diameter_mm", self.pitch_diameter_mm))
+        _set(self, "pitch_diameter_mm", _size("pitch_diameter_mm", self.pitch_diameter_mm))
         _integer("starts", self.starts, 1, 20)
-        _set(self, "outer_diameter_mm", _positive("outer_diameter_mm", self.outer_diameter_mm))
+        _set(self, "outer_diameter_mm", _size("outer_diameter_mm", self.outer_diameter_mm))
         for name in ("major_diameter_mm", "minor_diameter_mm"):
-            _set(self, name, _optional_positive(name, getattr(self, name)))
+            _set(self, name, _optional_size(name, getattr(self, name)))
         _set(self, "pitch_list_mm", _pitch_list("pitch_list_mm", self.pitch_list_mm))
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from .design import Materials, PRSDesign
-from .errors import DesignError, EnvironmentFailure
+from .errors import DesignError, EnvironmentFailure, key_name, quote
 
 #: Comments written by ``prs-geom init`` above each key (unit and meaning).
 FIELD_COMMENTS: dict[str, str] = {
@@ -96,7 +96,7 @@ def _build(cls: type, data: Any, path: str) -> Any:
     kwargs: dict[str, Any] = {}
     for key, value in data.items():
         if key not in known:
-            raise DesignError(f"{path}.{key}" if path else key, value,
+            raise DesignError(f"{path}.{key_name(key)}" if path else key_name(key), value,
                               "unknown key; allowed: " + ", ".join(sorted(known)))
         sub = _nested_type(cls, key)
         kwargs[key] = _build(sub, value, f"{path}.{key}" if path else key) if sub else value
@@ -163,16 +163,8 @@ def design_from_dict(data: dict[str, Any]):
 
 # --------------------------------------------------------------------------- TOML
 def toml_string(text: str) -> str:
-    """A TOML basic string: quotes, backslashes and control characters escaped."""
-    out = []
-    for ch in text:
-        if ch in '"\\':
-            out.append("\\" + ch)
-        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
-            out.append(f"\\u{ord(ch):04X}")
-        else:
-            out.append(ch)
-    return '"' + "".join(out) + '"'
+    """A TOML basic string: quotes, backslashes and non-printable characters escaped."""
+    return quote(text)
 
 
 def _toml_value(v: Any) -> str:

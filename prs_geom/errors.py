@@ -17,6 +17,29 @@ import numbers
 from typing import Any
 
 
+def quote(text: str) -> str:
+    """A TOML basic string: quotes and backslashes escaped, every non-printable character
+    (control characters, line separators) as \\uXXXX, so a message stays one line."""
+    out = []
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif not ch.isprintable():
+            out.append(f"\\u{ord(ch):04X}" if ord(ch) <= 0xFFFF else f"\\U{ord(ch):08X}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+_BARE_KEY = __import__("re").compile(r"^[A-Za-z0-9_-]+$")
+
+
+def key_name(key: Any) -> str:
+    """A design-file key as TOML spells it: bare when it can be, else quoted."""
+    key = str(key)
+    return key if _BARE_KEY.match(key) else quote(key)
+
+
 def format_value(value: Any) -> str:
     """``value`` spelled as a user writes it in a TOML design file or on the command line."""
     if value is None:
@@ -33,11 +56,11 @@ def format_value(value: Any) -> str:
             return "inf" if v > 0 else "-inf"
         return repr(v)
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return quote(value)
     if isinstance(value, bytes):
         return repr(value)
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {format_value(v)}" for k, v in value.items()) + "}"
+        return "{" + ", ".join(f"{key_name(k)} = {format_value(v)}" for k, v in value.items()) + "}"
     if hasattr(value, "__iter__"):
         items = list(value)
         shown = ", ".join(format_value(v) for v in items[:8])

@@ -164,6 +164,7 @@ th { background: #e8eef5; } td.k { text-align: left; font-family: monospace; }
 #errors { display: none; color: #a00; white-space: pre; }
 .plots svg { max-width: 100%; height: auto; }
 .note { color: #556; font-size: 0.85em; }
+.warnings { border: 2px solid #c80; background: #fff6e0; padding: 0.3em 0.8em; margin: 0.6em 0; }
 """
 
 
@@ -209,7 +210,10 @@ def write_html(design: PRSDesign, report: dict[str, Any], out: Path, path: Path)
              f"<title>prs_geom report: {html.escape(design.name)}</title><style>{CSS}</style></head><body>",
              f"<h1>Planetary roller screw '{html.escape(design.name)}'</h1>",
              f"<p class='note'>prs_geom {html.escape(report['prs_geom_version'])}. Units mm, N, MPa; "
-             f"tooth 1 at the loaded end. Warnings: {html.escape('; '.join(report['warnings']) or 'none')}</p>",
+             f"tooth 1 at the loaded end.</p>",
+             "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
+             + "".join(f"<li>{html.escape(w)}</li>" for w in report["warnings"]) + "</ul></div>"
+             if report["warnings"] else "<p id='warnings' class='note'>Warnings: none.</p>",
              "<div id='errors'></div>",
              "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas><div id='viewinfo' class='note'></div>"
              "<label class='note'><input type='checkbox' id='cutaway' checked> cut the nut open</label>"]

@@ -77,12 +77,25 @@ def parse_size(text: str, flag: str = "--memory-budget") -> int:
 def format_bytes(n: float) -> str:
     for unit, scale in (("GB", 2 ** 30), ("MB", 2 ** 20), ("kB", 2 ** 10)):
         if n >= scale:
-            return f"{n / scale:.1f} {unit}"
+            v = n / scale
+            return f"{v:.1f} {unit}" if v < 1e5 else f"{v:.3g} {unit}"
     return f"{n:.0f} B"
 
 
-def part_triangles(design: PRSDesign, tol: float) -> dict[str, int]:
-    """Estimated triangles of the screw, roller and nut meshes at chord tolerance ``tol`` (mm)."""
+def _millions(n: float) -> str:
+    v = n / 1e6
+    return f"{v:.2f} M" if v < 1e5 else f"{v:.3g} M"
+
+
+def _half_step(sagitta_ratio: float) -> float:
+    """Half the polygon step angle (rad) whose sagitta is ``sagitta_ratio`` x the radius:
+    acos(1 - x), by its series where x is below float resolution."""
+    return math.acos(1.0 - sagitta_ratio) if sagitta_ratio > 1e-8 else math.sqrt(2.0 * sagitta_ratio)
+
+
+def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
+    """Estimated triangles of the screw, roller and nut meshes at chord tolerance ``tol`` (mm),
+    as floats (a length of 1e300 mm gives an estimate, not an overflow)."""
     from .assembly import thread_length
     from .mesh import choose_tessellation
     from .profiles import ThreadProfiles
@@ -99,9 +112,8 @@ def part_triangles(design: PRSDesign, tol: float) -> dict[str, int]:
         ends = 4.0 * tess.columns_per_turn + 2.0 * strands   # two end fans/annuli
         if p.internal:  # body cylinder (two triangles a facet) and its share of the end annuli
             body = 0.5 * design.nut.outer_diameter_mm
-            facets = max(12, math.ceil(math.pi / math.acos(1.0 - tol / body)))
-            ends += 4.0 * facets
-        out[name] = int(math.ceil(surface + ends))
+            ends += 4.0 * max(12.0, math.pi / _half_step(tol / body))
+        out[name] = surface + ends
     return out
 
 
@@ -109,15 +121,15 @@ def part_triangles(design: PRSDesign, tol: float) -> dict[str, int]:
 class Estimate:
     """Triangles and peak memory of a job (bytes)."""
 
-    export_triangles: int
-    placed_triangles: int
-    check_triangles: int
-    peak_bytes: int
-    parts: dict[str, int]
+    export_triangles: float
+    placed_triangles: float
+    check_triangles: float
+    peak_bytes: float
+    parts: dict[str, float]
 
     def describe(self) -> str:
-        return (f"{self.export_triangles / 1e6:.2f} M triangles in the part meshes, "
-                f"{self.check_triangles / 1e6:.2f} M for the interference check, estimated peak "
+        return (f"{_millions(self.export_triangles)} triangles in the part meshes, "
+                f"{_millions(self.check_triangles)} for the interference check, estimated peak "
                 f"memory {format_bytes(self.peak_bytes)}")
 
 
@@ -134,8 +146,8 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True) -> Esti
         peaks.append(export_tri * BYTES_PER_EXPORT_TRIANGLE + placed * BYTES_PER_PLACED_TRIANGLE)
     if check:
         peaks.append(check_tri * BYTES_PER_CHECK_TRIANGLE)
-    return Estimate(export_tri if export else 0, placed if export else 0, check_tri,
-                    int(BASE_BYTES + max(peaks)), parts)
+    return Estimate(export_tri if export else 0.0, placed if export else 0.0, check_tri,
+                    BASE_BYTES + max(peaks), parts)
 
 
 def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = True,

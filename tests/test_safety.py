@@ -313,3 +313,29 @@ def test_debug_is_accepted_after_the_subcommand(tmp_path):
     assert code == 2 and "does not exist" in err and "Traceback" not in err
     with pytest.raises(Exception, match="does not exist"):
         run(["validate", str(tmp_path / "missing.toml"), "--debug"])
+
+
+# --------------------------------------------------------------------------- check warnings
+def test_check_over_tolerance_becomes_a_warning_everywhere(tmp_path, tiny_file, monkeypatch):
+    """A check whose measured difference exceeds its tolerance reaches report.json, the
+    console and report.html (forced here by a mesh check row that carries a warning)."""
+    import prs_geom.mesh as mesh_mod
+
+    real = mesh_mod.mesh_report
+
+    def with_warning(tm, *a, **k):
+        row = real(tm, *a, **k)
+        if row["part"] == "roller":
+            row["warnings"] = ["measured deviation 0.0123 mm exceeds the chord tolerance 0.01 mm"]
+        return row
+
+    monkeypatch.setattr(mesh_mod, "mesh_report", with_warning)
+    out = tmp_path / "out"
+    code, _, err = run(["build", str(tiny_file), "--out", str(out), "--quiet", *BUDGET])
+    assert code == 0
+    expect = "mesh check (roller): measured deviation 0.0123 mm exceeds the chord tolerance 0.01 mm"
+    report = json.loads((out / "report.json").read_text())
+    assert expect in report["warnings"]
+    assert f"warning: {expect}" in err
+    page = (out / "report.html").read_text()
+    assert f"<li>{expect}</li>" in page and "id='warnings'" in page
