@@ -10,6 +10,8 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")
+# SVG element ids from a fixed salt: the same figure gives the same file bytes
+matplotlib.rcParams["svg.hashsalt"] = "prs-geom"
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
