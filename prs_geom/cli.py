@@ -204,7 +204,7 @@ def cmd_loads(args: argparse.Namespace) -> int:
             design = design.with_changes(loading=replace(design.loading, axial_load_n=args.load))
         except DesignError as exc:
             raise exc.renamed("--load") from None
-    rep = loads_report(design)
+    rep = loads_report(design, progress=silent if args.json else StderrProgress())
     if args.json:
         _print_json(rep)
         return EXIT_OK

@@ -77,7 +77,7 @@ def stage_loads(ctx: BuildContext) -> None:
 
     d = ctx.design
     model = build_model(d)
-    rep = loads_report(d, model)
+    rep = loads_report(d, model, progress=ctx.progress)
     ctx.report["loads"] = rep
     equal = design_pitches(d, model=model)
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}

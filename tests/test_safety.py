@@ -339,3 +339,28 @@ def test_check_over_tolerance_becomes_a_warning_everywhere(tmp_path, tiny_file, 
     assert f"warning: {expect}" in err
     page = (out / "report.html").read_text()
     assert f"<li>{expect}</li>" in page and "id='warnings'" in page
+
+
+# --------------------------------------------------------------------------- load solver at the limits
+@pytest.mark.parametrize("n", [100, 200, 500])
+def test_loads_command_succeeds_for_many_teeth(tmp_path, n):
+    """`prs-geom loads` for engaged_teeth 100, 200, 500 on the default design, constant and
+    graded (the equal-load lists of design-pitch): complementarity solver, with progress."""
+    const = tmp_path / "const.toml"
+    const.write_text(f"[thread]\nengaged_teeth = {n}\n")
+    graded = tmp_path / "graded.toml"
+    assert run(["design-pitch", str(const), "--out", str(graded)])[0] == 0
+    for f, worst in ((const, None), (graded, 1.0)):
+        code, out, err = run(["loads", str(f), "--json"])
+        assert code == 0, err
+        rep = json.loads(out)
+        assert len(rep["ldc_nut_roller"]) == n
+        # the coefficients average 1 on each side; the graded design shares equally
+        assert sum(rep["ldc_nut_roller"]) / n == pytest.approx(1.0, abs=1e-12)
+        assert sum(rep["ldc_roller_screw"]) / n == pytest.approx(1.0, abs=1e-12)
+        if worst is not None:
+            assert rep["max_ldc"] == pytest.approx(worst, abs=1e-9)
+        else:
+            assert rep["max_ldc"] > 1.4
+    code, _, err = run(["loads", str(const)])
+    assert code == 0 and "loads: 1/" in err          # progress on stderr
