@@ -136,7 +136,9 @@ def test_stale_temporary_folders_of_dead_processes_are_cleaned(tmp_path):
 
 
 def _start_build(tiny_file: Path, out: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "prs_geom.cli", "build", str(tiny_file), "--out", str(out),
+    # the installed console script, as a user runs it
+    exe = Path(sys.executable).parent / "prs-geom"
+    return subprocess.Popen([str(exe), "build", str(tiny_file), "--out", str(out),
                              *BUDGET], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
