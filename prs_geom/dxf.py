@@ -33,6 +33,23 @@ LAYERS = {"PROFILE": (7, "Continuous"), "CENTRE": (1, "CENTER"), "PITCH": (3, "D
 TEXT_HEIGHT = 1.2
 
 
+def save_dxf(doc, path: Path) -> None:
+    """Save ``doc`` with its CLASSES section in a fixed order.
+
+    ezdxf registers the classes of the entity types in use by iterating a set, so their
+    order (and the file's bytes) would change with Python's string-hash seed from run to
+    run; registering them here first, required ones in ezdxf's order and the rest sorted,
+    makes the same drawing give the same file.
+    """
+    from ezdxf.sections.classes import REQ_R2004, REQUIRED_CLASSES
+
+    for name in REQUIRED_CLASSES.get(doc.dxfversion, REQ_R2004):
+        doc.classes.add_class(name)
+    for name in sorted(doc.entitydb.dxf_types_in_use()):
+        doc.classes.add_class(name)
+    doc.saveas(path)
+
+
 def _add(block, prims) -> None:
     for pr in prims:
         if isinstance(pr, Segment):
@@ -104,4 +121,4 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
     for i, text in enumerate(lines):
         msp.add_text(text, height=TEXT_HEIGHT, dxfattribs={"layer": "ANNOTATION"}).set_placement(
             (x0 + 2.0, -6.0 - 2.0 * TEXT_HEIGHT * (i + 1) + TEXT_HEIGHT))
-    doc.saveas(path)
+    save_dxf(doc, path)

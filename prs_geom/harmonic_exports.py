@@ -23,6 +23,7 @@ import numpy as np
 import trimesh
 from ezdxf import units
 
+from .dxf import save_dxf
 from .harmonic import HarmonicDesign, contact_point, contact_state, tilt_angle
 
 
@@ -144,4 +145,4 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
         msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
     msp.add_text(f"{d.name}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; units mm",
                  height=2.0, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, -10.0))
-    doc.saveas(path)
+    save_dxf(doc, path)
