@@ -14,11 +14,11 @@ import time
 
 import numpy as np
 
-from prs_geom.contact import ContactBatch, solve_collinear, tooth_contacts
-from prs_geom.design import default_design
-from prs_geom.designio import load_design
-from prs_geom.fcl_verify import verify_contacts
-from prs_geom.interference import interference
+from prs_geom.analysis.contact import ContactBatch, solve_collinear, tooth_contacts
+from prs_geom.model.design import default_design
+from prs_geom.model.io import load_design
+from prs_geom.checks.fcl import verify_contacts
+from prs_geom.checks.interference import interference
 
 
 def tile(batch: ContactBatch, q0: np.ndarray, reps: int):

@@ -1,4 +1,4 @@
-"""Tooth-load solver timings (prs_geom.loads).
+"""Tooth-load solver timings (prs_geom.analysis.load_solver).
 
 Run:  python benchmarks/bench_loads.py
 
@@ -17,8 +17,8 @@ import time
 
 import numpy as np
 
-from prs_geom.design import PRSDesign, Thread
-from prs_geom.loads import build_model, forward, gap_terms, loads_report, solve_loads, solve_loads_batch
+from prs_geom.model.design import PRSDesign, Thread
+from prs_geom.analysis.loads import build_model, forward, gap_terms, loads_report, solve_loads, solve_loads_batch
 
 
 def median_time(fn, repeats=7):

@@ -17,8 +17,8 @@ import tracemalloc
 
 import numpy as np
 
-from prs_geom.assembly import build_assembly
-from prs_geom.design import default_design
+from prs_geom.mesh.assembly import build_assembly
+from prs_geom.model.design import default_design
 
 
 def build(design, tol):

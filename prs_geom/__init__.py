@@ -1,17 +1,69 @@
-"""prs_geom: planetary roller screw design to manufacturable geometry.
+"""prs_geom: planetary roller screw design to manufacturable geometry and trustworthy numbers.
 
-Stages, each in its own module, data flowing one way:
-design (:mod:`prs_geom.design`) -> profiles and helices (:mod:`prs_geom.profiles`,
-:mod:`prs_geom.helix`) -> meshes (:mod:`prs_geom.mesh`, :mod:`prs_geom.assembly`) ->
-exports and report (:mod:`prs_geom.pipeline`, :mod:`prs_geom.cli`).
+The package follows its data flow, each folder a layer that imports only the ones below it
+(checked by import-linter)::
+
+    cli, pipeline      the edge: command line, stage orchestration, this API
+    exports/           files for people and tools
+    checks/            FCL comparison, interference
+    mesh/              triangle meshes and the placed assembly
+    analysis/          contact, theoretical diameter, loads, pitch design, machining data
+    geometry/          analytic surfaces in pure numpy
+    model/             design dataclasses, validation, design files, errors
+    harmonic/          the second product line, beside the rest
+
+Python API (``import prs_geom as pg``; see README "Python API")::
+
+    d = pg.default_design()                # or pg.load_design("design.toml")
+    res = pg.analyse(d)
+    res.contact.theoretical_screw_pitch_diameter_mm, res.loads.max_ldc
+    graded = pg.design_pitch(d, target="equal")
+    pg.save_design(graded, "graded.toml")
+    meshes = pg.build_meshes(graded)       # named trimesh meshes
+    report = pg.build(graded, "exports/graded")
+
+Importing the package is light: every name loads its module on first use, so
+``import prs_geom`` imports no mesh, CAD or plotting library.
 """
-from .design import PRSDesign, default_design
-from .designio import load_design, save_design
-from .errors import ConvergenceError, DesignError, DesignWarning, PRSGeomError
+from __future__ import annotations
 
-__version__ = "0.1.0"
+import importlib
+from typing import Any
 
-__all__ = [
-    "PRSDesign", "default_design", "load_design", "save_design",
-    "DesignError", "DesignWarning", "ConvergenceError", "PRSGeomError", "__version__",
-]
+from prs_geom._version import __version__
+
+#: public name -> (module, attribute)
+_API: dict[str, tuple[str, str]] = {
+    "PRSDesign": ("prs_geom.model.design", "PRSDesign"),
+    "default_design": ("prs_geom.model.design", "default_design"),
+    "HarmonicDesign": ("prs_geom.harmonic.model", "HarmonicDesign"),
+    "load_design": ("prs_geom.pipeline", "load_any_design"),
+    "save_design": ("prs_geom.model.io", "save_design"),
+    "analyse": ("prs_geom.pipeline", "analyse"),
+    "Analysis": ("prs_geom.pipeline", "Analysis"),
+    "design_pitch": ("prs_geom.pipeline", "design_pitch"),
+    "build_meshes": ("prs_geom.pipeline", "build_meshes"),
+    "build": ("prs_geom.pipeline", "build"),
+    "PRSGeomError": ("prs_geom.model.errors", "PRSGeomError"),
+    "DesignError": ("prs_geom.model.errors", "DesignError"),
+    "DesignWarning": ("prs_geom.model.errors", "DesignWarning"),
+    "ConvergenceError": ("prs_geom.model.errors", "ConvergenceError"),
+    "EnvironmentFailure": ("prs_geom.model.errors", "EnvironmentFailure"),
+    "OutputRefused": ("prs_geom.model.errors", "OutputRefused"),
+}
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module, attr = _API[name]
+    except KeyError:
+        raise AttributeError(f"module 'prs_geom' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value   # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))

@@ -26,13 +26,13 @@ import warnings
 from pathlib import Path
 from typing import Sequence
 
-from . import __version__
-from .design import PRSDesign, default_design
-from .designio import dumps_toml, load_design
-from .errors import DesignError, DesignWarning, EnvironmentFailure, PRSGeomError
-from .output import OutputRefused, check_output_dir, check_output_file, write_file_atomic
-from .progress import StderrProgress, silent
-from .resources import ResourceLimitError, parse_size
+from prs_geom._version import __version__
+from prs_geom.model.design import PRSDesign, default_design
+from prs_geom.exports.output import check_output_dir
+from prs_geom.mesh.budget import ResourceLimitError, parse_size
+from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
+from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
+from prs_geom.progress import StderrProgress, silent
 
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
@@ -61,7 +61,9 @@ def _load_any(path: str | None):
     """A PRS or harmonic design (by the file's ``kind``); the default PRS without a file."""
     if path is None:
         return default_design()
-    return load_design(path)
+    from prs_geom.pipeline import load_any_design
+
+    return load_any_design(path)
 
 
 def _load(path: str | None) -> PRSDesign:
@@ -99,7 +101,7 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from .resources import estimate
+    from prs_geom.mesh.budget import estimate
 
     design = _load_any(args.design)
     _warn(design)
@@ -112,7 +114,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    from .pipeline import build
+    from prs_geom.pipeline import build
 
     design = _load_any(args.design)
     _warn(design)
@@ -136,7 +138,7 @@ def _print_json(obj) -> None:
 
 
 def cmd_contact(args: argparse.Namespace) -> int:
-    from .contact import contact_report
+    from prs_geom.analysis.contact import contact_report
 
     design = _load(args.design)
     _warn(design)
@@ -166,9 +168,9 @@ def cmd_contact(args: argparse.Namespace) -> int:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    from .interference import interference
+    from prs_geom.checks.interference import interference
 
-    from .resources import guard
+    from prs_geom.mesh.budget import guard
 
     design = _load(args.design)
     _warn(design)
@@ -192,7 +194,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_loads(args: argparse.Namespace) -> int:
-    from .loads import loads_report
+    from prs_geom.analysis.loads import loads_report
 
     design = _load(args.design)
     _warn(design)
@@ -259,8 +261,7 @@ def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
 
 
 def cmd_design_pitch(args: argparse.Namespace) -> int:
-    from .designio import dumps_toml
-    from .loads import build_model, design_pitches, forward, with_pitch_lists
+    from prs_geom.analysis.loads import build_model, design_pitches, forward, with_pitch_lists
 
     design = _load(args.design)
     _warn(design)
@@ -288,9 +289,9 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
 def cmd_harmonic(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .harmonic import HarmonicDesign, harmonic_report
+    from prs_geom.harmonic.model import HarmonicDesign, harmonic_report
 
-    d = HarmonicDesign() if args.design is None else load_design(args.design)
+    d = HarmonicDesign() if args.design is None else _load_any(args.design)
     if not isinstance(d, HarmonicDesign):
         raise DesignError("kind", "prs", "'prs-geom harmonic' needs a design file with kind = \"harmonic\"")
     a = None

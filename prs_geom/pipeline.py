@@ -1,43 +1,120 @@
-"""The build pipeline: design -> analysis -> geometry -> checks -> exports.
+"""The build pipeline and the Python API: design -> analysis -> meshes -> checks -> exports.
+
+Each stage computes its result once and keeps it on the :class:`BuildContext`
+(``ctx.contact``, ``ctx.loads``, ``ctx.meshes``, ...); later stages and the exporters take
+those objects, never the report dict or another stage's files. The report dict only
+collects what is written to ``report.json``.
 
 ``build`` runs every stage available on a design and writes all exports plus
-``report.json`` into an output folder atomically (see :mod:`prs_geom.output`).
-Each stage is a function ``stage(ctx)`` that fills its report section and may write files
-into ``ctx.out``; stages run in the order of :data:`STAGES`.
+``report.json`` into an output folder atomically (:mod:`prs_geom.exports.output`); stages
+run in the order of :data:`STAGES` (:data:`HARMONIC_STAGES` for the harmonic drive).
+
+The functions :func:`load_any_design`, :func:`analyse`, :func:`design_pitch`,
+:func:`build_meshes` and :func:`build` are the public Python API (``prs_geom.analyse`` and
+so on, see README "Python API").
 """
 from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
-import trimesh
 
-from . import __version__
-from .assembly import carrier_angles, roller_spin
-from .design import PRSDesign
-from .designio import design_to_dict, dumps_toml
-from .errors import EnvironmentFailure
-from .output import AtomicOutputDir
-from .progress import ProgressFn, silent
+from prs_geom._version import __version__
+from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.analysis.loads import LoadsResult, analyse_loads
+from prs_geom.analysis.loads import design_pitch as _design_pitch
+from prs_geom.exports.output import AtomicOutputDir
+from prs_geom.geometry.frames import carrier_angles, roller_spin
+from prs_geom.harmonic.model import HarmonicDesign
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.errors import EnvironmentFailure
+from prs_geom.model.io import PRS_KINDS, design_to_dict, dumps_toml, load_design
+from prs_geom.progress import ProgressFn, silent
+
+if TYPE_CHECKING:  # pragma: no cover
+    import trimesh
+
+    from prs_geom.analysis.machining import MachiningSheet
+    from prs_geom.mesh.assembly import Assembly
 
 REPORT_NAME = "report.json"
 #: Version of the report.json layout (``format_version``); the JSON Schema
-#: ``prs_geom/schemas/report.schema.json`` describes it.
+#: ``prs_geom/exports/schemas/report.schema.json`` describes it.
 REPORT_FORMAT_VERSION = 1
+#: Design classes by the ``kind`` of a design file: both product lines.
+DESIGN_KINDS: dict[str, type] = {**PRS_KINDS, "harmonic": HarmonicDesign}
+
+
+# --------------------------------------------------------------------------- API
+def load_any_design(path: str | Path) -> PRSDesign | HarmonicDesign:
+    """A design file of either product line (by its ``kind``), validated."""
+    return load_design(path, DESIGN_KINDS)
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """The analysis of a design: ``contact`` (:class:`~prs_geom.analysis.contact.ContactResult`,
+    e.g. ``.contact.theoretical_screw_pitch_diameter_mm``) and ``loads``
+    (:class:`~prs_geom.analysis.loads.LoadsResult`, e.g. ``.loads.max_ldc``)."""
+
+    design: PRSDesign
+    contact: ContactResult
+    loads: LoadsResult
+
+
+def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
+    """Contact points, theoretical screw diameter and load distribution of ``design``."""
+    contact = analyse_contact(design)
+    return Analysis(design, contact, analyse_loads(design, contact, progress=progress))
+
+
+def design_pitch(design: PRSDesign, target: str | dict[str, Any] = "equal", name: str | None = None) -> PRSDesign:
+    """A new design whose pitch lists give ``target`` load sharing at the design load:
+    ``"equal"`` or ``{"nut_roller": [...], "roller_screw": [...]}`` (mean 1 each)."""
+    return _design_pitch(design, target, name)
+
+
+def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trimesh.Trimesh"]:
+    """Triangle meshes of the design, by name: ``screw``, ``roller`` and ``nut`` in their
+    own frames, and every placed scene part (``roller_0`` ..., gears) in the screw frame.
+    ``tol`` is the chord tolerance (mm; the design's by default)."""
+    from prs_geom.mesh.assembly import build_assembly
+
+    asm = build_assembly(design, tol=tol)
+    out = {name: tm.to_trimesh() for name, tm in asm.parts.items()}
+    for name in asm.placed:
+        if name not in ("screw", "nut"):
+            out[name] = asm.placed_mesh(name)
+    return out
+
+
+# --------------------------------------------------------------------------- context
+@dataclass
+class MeshStage:
+    """The meshes stage: the assembly at the design's chord tolerance and its checks."""
+
+    assembly: "Assembly"
+    checks: list[dict[str, Any]]
 
 
 @dataclass
 class BuildContext:
-    """What stages share: the design, the temporary output folder and the report."""
+    """What stages share: the design, the temporary output folder, the report being
+    collected and each stage's result (filled in stage order, each computed once)."""
 
-    design: PRSDesign
+    design: Any
     out: Path
     report: dict[str, Any]
     progress: ProgressFn = silent
+    contact: ContactResult | None = None
+    loads: LoadsResult | None = None
+    meshes: MeshStage | None = None
+    machining: dict[str, "MachiningSheet"] | None = None
+    plots_svg: dict[str, str] = field(default_factory=dict)
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
@@ -54,6 +131,7 @@ class BuildContext:
         return path
 
 
+# --------------------------------------------------------------------------- stages
 def stage_design(ctx: BuildContext) -> None:
     """Write the resolved design back as ``design.toml``."""
     ctx.write_text("design.toml", dumps_toml(ctx.design, header=f"resolved design '{ctx.design.name}', "
@@ -70,37 +148,35 @@ def stage_pitch(ctx: BuildContext) -> None:
     }
 
 
+def stage_contact(ctx: BuildContext) -> None:
+    """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
+    ctx.contact = analyse_contact(ctx.design)
+    ctx.report["contact"] = ctx.contact.report()
+
+
 def stage_loads(ctx: BuildContext) -> None:
     """Load distribution, equal-load pitch design, off-design and plots."""
-    from .loads import build_model, design_pitches, forward, loads_report, off_design, with_pitch_lists
-    from .plots import plot_loads
+    from prs_geom.exports.plots import plot_loads
 
     d = ctx.design
-    model = build_model(d)
-    rep = loads_report(d, model, progress=ctx.progress)
+    ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress)
+    rep = loads.report()
     ctx.report["loads"] = rep
-    equal = design_pitches(d, model=model)
+    equal = loads.equal_load
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
-    if d.graded:
-        shown = {"ldc_nut_roller": rep["ldc_nut_roller"], "ldc_roller_screw": rep["ldc_roller_screw"]}
-        off, label = rep["off_design"], "design pitch lists"
-        pr, pn = np.array(d.pitch_list("roller")), np.array(d.pitch_list("nut"))
-    else:
-        eq = with_pitch_lists(d, equal)
-        r = forward(eq, model=model)
-        shown = {"ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist()}
-        off, label = off_design(eq, model=model), "equal-load pitch design"
-        pr, pn = np.array(equal.roller_mm), np.array(equal.nut_mm)
     p = d.thread.pitch_mm
-    for f in plot_loads(ctx.out, d.name, rep["constant_pitch"], shown, off, (pr - p) * 1e3, (pn - p) * 1e3, label):
-        ctx.report["files"].append(f)
+    pr, pn = np.array(loads.designed_roller_mm), np.array(loads.designed_nut_mm)
+    files = plot_loads(ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc, loads.designed_off_design,
+                       (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label, ctx.plots_svg)
+    ctx.report["files"] += files
 
 
 def stage_meshes(ctx: BuildContext) -> None:
     """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
-    from .assembly import SIMPLIFIED_PARTS, build_assembly, thread_length
-    from .exports import export_meshes
-    from .mesh import analytic_thread_volume, mesh_report
+    from prs_geom.exports.meshes import export_meshes
+    from prs_geom.geometry.frames import thread_length
+    from prs_geom.mesh.assembly import SIMPLIFIED_PARTS, build_assembly
+    from prs_geom.mesh.thread import analytic_thread_volume, mesh_report
 
     d = ctx.design
     asm = build_assembly(d, progress=ctx.progress)
@@ -112,6 +188,7 @@ def stage_meshes(ctx: BuildContext) -> None:
             tm.profile, lengths[name], tm.body_radius)
         rows.append(mesh_report(tm, vol))
         ctx.progress("mesh checks", i + 1, len(asm.parts))
+    ctx.meshes = MeshStage(asm, rows)
     ctx.report["checks"]["meshes"] = rows
     ctx.report["assembly"] = {
         "parts": list(asm.placed),
@@ -120,53 +197,46 @@ def stage_meshes(ctx: BuildContext) -> None:
         "simplified": SIMPLIFIED_PARTS,
         "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
     }
-    for name, text in export_meshes(asm, ctx.out).items():
+    for name in export_meshes(asm, ctx.out):
         ctx.report["files"].append(name)
 
 
-def stage_contact(ctx: BuildContext) -> None:
-    """Analytic contact points and the theoretical screw pitch diameter."""
-    from .contact import contact_report
-
-    ctx.report["contact"] = contact_report(ctx.design)
-
-
 def stage_checks(ctx: BuildContext) -> None:
-    """FCL verification of the contacts and the interference check (both screws)."""
-    from .fcl_verify import verify_contacts
-    from .interference import interference
+    """FCL verification of the contacts and the interference check (both screws), with the
+    theoretical screw of the contact stage."""
+    from prs_geom.checks.fcl import verify_contacts
+    from prs_geom.checks.interference import interference_checks
 
-    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design)
+    screw = ctx.contact.screw_profile
+    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design, screw_profile=screw)
     ctx.progress("fcl verification", 1, 1)
-    corrected = interference(ctx.design, "corrected", progress=ctx.progress)
-    corrected["nominal_screw"] = interference(ctx.design, "nominal", progress=ctx.progress)
-    ctx.report["checks"]["interference"] = corrected
+    ctx.report["checks"]["interference"] = interference_checks(ctx.design, screw, progress=ctx.progress)
     ctx.report["warnings"] += check_warnings(ctx.report)
 
 
 def stage_manufacturing(ctx: BuildContext) -> None:
     """Machining sheets (CSV per part, one XLSX) and the DXF profile drawing."""
-    from .dxf import write_dxf
-    from .machining import machining_sheets
-    from .sheets import sheet_csv, write_xlsx
+    from prs_geom.analysis.machining import machining_sheets
+    from prs_geom.exports.dxf import write_dxf
+    from prs_geom.exports.sheets import sheet_csv, write_xlsx
 
-    sheets = machining_sheets(ctx.design)
+    ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact)
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
     write_xlsx(sheets, ctx.add_file("machining.xlsx"))
-    extra = {}
-    if ctx.report.get("contact"):
-        sr = ctx.report["contact"]["screw_roller"]
-        extra["theoretical screw pitch dia. (grind to)"] = f"{sr['theoretical_pitch_diameter_mm']:.6f} mm"
+    extra = {"theoretical screw pitch dia. (grind to)":
+             f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
 
 
 def stage_html(ctx: BuildContext) -> None:
-    """The self-contained HTML report (needs every earlier section)."""
-    from .html_report import write_html
+    """The self-contained HTML report, from the stage results."""
+    from prs_geom.exports.html import write_html
 
-    write_html(ctx.design, ctx.report, ctx.out, ctx.add_file("report.html"))
+    write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
+               contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
+               mesh_checks=ctx.meshes.checks if ctx.meshes else None)
 
 
 #: Stages in run order: (report name, function).
@@ -183,9 +253,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
 
 
 def new_report(design) -> dict[str, Any]:
-    """The report skeleton; see README "report.json" for the schema."""
-    from .harmonic import HarmonicDesign
-
+    """The report skeleton; its JSON Schema is ``prs_geom/exports/schemas/report.schema.json``."""
     if isinstance(design, HarmonicDesign):
         return {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
                 "design": design_to_dict(design), "warnings": [], "harmonic": None, "checks": {},
@@ -217,7 +285,7 @@ def check_warnings(report: dict[str, Any]) -> list[str]:
     return out
 
 
-def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
+def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None) -> BuildContext:
     ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress)
     for name, fn in (STAGES if stages is None else stages):
@@ -230,10 +298,11 @@ def run_stages(design: PRSDesign, out: Path, progress: ProgressFn = silent,
 
 def harmonic_stage(ctx: BuildContext) -> None:
     """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
-    from .harmonic import harmonic_report
-    from .harmonic_exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
-                                   flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
-                                   write_dxf)
+    from prs_geom.exports.meshes import write_stl
+    from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
+                                           flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
+                                           write_dxf)
+    from prs_geom.harmonic.model import harmonic_report
 
     d = ctx.design
     rep = harmonic_report(d)
@@ -246,7 +315,7 @@ def harmonic_stage(ctx: BuildContext) -> None:
     for name, mesh, prof, arc_bound in (
             ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d), 0.0),
             ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
-        ctx.add_file(f"{name}.stl").write_bytes(trimesh.exchange.stl.export_stl(mesh))
+        write_stl(mesh, ctx.add_file(f"{name}.stl"))
         rev = revolve_deviation(mesh, prof)
         dev = rev + arc_bound
         rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
@@ -275,19 +344,19 @@ def _environment_failure(exc: OSError, atomic: AtomicOutputDir) -> EnvironmentFa
                               f"{atomic.given} is as it was)")
 
 
-def build(design, out_dir: str | Path, progress: ProgressFn = silent,
+def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
           memory_budget: int | None = None) -> dict[str, Any]:
-    """Run every stage and write the exports and ``report.json`` to ``out_dir``.
+    """Run every stage and write the exports and ``report.json`` to ``out_dir``: what
+    ``prs-geom build`` does.
 
     ``out_dir`` must be a new path, an empty folder or an earlier prs-geom output folder
-    (:mod:`prs_geom.output`; anything else raises :class:`~prs_geom.output.OutputRefused`
-    before any work). The job is refused up front when its estimated memory exceeds
-    ``memory_budget`` (bytes; default a share of the available memory,
-    :mod:`prs_geom.resources`). Written atomically: if any stage fails, ``out_dir`` keeps
-    its previous content. Returns the report dict.
+    (:mod:`prs_geom.exports.output`; anything else raises
+    :class:`~prs_geom.model.errors.OutputRefused` before any work). The job is refused up
+    front when its estimated memory exceeds ``memory_budget`` (bytes; default a share of the
+    available memory, :mod:`prs_geom.mesh.budget`). Written atomically: if any stage fails,
+    ``out_dir`` keeps its previous content. Returns the report dict.
     """
-    from .harmonic import HarmonicDesign
-    from .resources import guard
+    from prs_geom.mesh.budget import guard
 
     harmonic = isinstance(design, HarmonicDesign)
     atomic = AtomicOutputDir(out_dir, {"design": design.name})

@@ -35,7 +35,7 @@ def validate_every_build():
     from pathlib import Path
 
     from prs_geom import pipeline
-    from prs_geom.report_schema import validate_report
+    from prs_geom.exports.report_schema import validate_report
 
     original = pipeline.build
 

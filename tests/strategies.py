@@ -6,8 +6,8 @@ import math
 from hypothesis import assume
 from hypothesis import strategies as st
 
-from prs_geom.design import Loading, Nut, PRSDesign, Roller, Screw, Thread
-from prs_geom.errors import DesignError
+from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread
+from prs_geom.model.errors import DesignError
 
 
 @st.composite

@@ -4,9 +4,10 @@ import math
 import numpy as np
 import pytest
 
-from prs_geom.assembly import (FIRST_MID_PITCHES, build_assembly, carrier_angles, roller_transform)
-from prs_geom.design import PRSDesign, Roller, Thread, default_design
-from prs_geom.mesh import axial_line_crossings
+from prs_geom.geometry.frames import FIRST_MID_PITCHES, carrier_angles, roller_transform
+from prs_geom.mesh.assembly import build_assembly
+from prs_geom.model.design import PRSDesign, Roller, Thread, default_design
+from prs_geom.mesh.thread import axial_line_crossings
 
 
 def mod_p(x, p):

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from cli_helpers import run
 from prs_geom import pipeline
-from prs_geom.designio import design_to_dict, toml_string
-from prs_geom.design import default_design
+from prs_geom.model.io import design_to_dict, toml_string
+from prs_geom.model.design import default_design
 
 
 def _toml(v):

@@ -7,10 +7,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
 
-from prs_geom.contact import (ContactBatch, contact_point, contact_report, euclidean_distance,
+from prs_geom.analysis.contact import (ContactBatch, contact_point, contact_report, euclidean_distance,
                               solve_collinear, solve_gap_stationary, theoretical_screw, tooth_contacts)
-from prs_geom.design import ContactSettings, Nut, PRSDesign, Roller, Screw, Thread, default_design
-from prs_geom.errors import ConvergenceError
+from prs_geom.model.design import ContactSettings, Nut, PRSDesign, Roller, Screw, Thread, default_design
+from prs_geom.model.errors import ConvergenceError
 from strategies import standard_designs
 
 

@@ -4,10 +4,10 @@ import warnings
 import pytest
 from hypothesis import given, settings
 
-from prs_geom.design import (MAX_PITCH_DEVIATION, Nut, PRSDesign, Roller, Screw, Thread,
+from prs_geom.model.design import (MAX_PITCH_DEVIATION, Nut, PRSDesign, Roller, Screw, Thread,
                              default_design)
-from prs_geom.errors import DesignError, DesignWarning
-from prs_geom.profiles import ThreadProfiles
+from prs_geom.model.errors import DesignError, DesignWarning
+from prs_geom.geometry.profiles import ThreadProfiles
 from strategies import standard_designs
 
 

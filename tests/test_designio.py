@@ -5,10 +5,10 @@ import sys
 import pytest
 from hypothesis import given, settings
 
-from prs_geom.design import PRSDesign, Roller, default_design
-from prs_geom.designio import (design_from_dict, design_to_dict, dumps_json, dumps_toml,
+from prs_geom.model.design import PRSDesign, Roller, default_design
+from prs_geom.model.io import (design_from_dict, design_to_dict, dumps_json, dumps_toml,
                                load_design, loads_json, loads_toml, save_design)
-from prs_geom.errors import DesignError
+from prs_geom.model.errors import DesignError
 from strategies import standard_designs
 
 

@@ -6,9 +6,9 @@ import ezdxf
 import numpy as np
 import pytest
 
-from prs_geom.design import Nut, PRSDesign, Roller
-from prs_geom.dxf import write_dxf
-from prs_geom.profiles import ThreadProfiles
+from prs_geom.model.design import Nut, PRSDesign, Roller
+from prs_geom.exports.dxf import write_dxf
+from prs_geom.geometry.profiles import ThreadProfiles
 
 PL_R = tuple(2.0 + 4e-4 * (19 - j) / 19 + 1e-4 * math.sin(j) for j in range(19))
 PL_N = tuple(2.0 + 6e-4 * (19 - j) / 19 + 2e-4 * math.cos(j) for j in range(19))

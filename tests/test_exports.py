@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from prs_geom.design import PRSDesign, Roller, MeshSettings
+from prs_geom.model.design import PRSDesign, Roller, MeshSettings
 from prs_geom.pipeline import build
 
 

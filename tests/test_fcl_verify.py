@@ -7,12 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import prs_geom.fcl_verify as fv
-from prs_geom.design import Loading, Nut, PRSDesign, Roller, Screw, Thread, default_design
-from prs_geom.designio import load_design
-from prs_geom.errors import DesignWarning
-from prs_geom.fcl_verify import Comparison, check_comparisons, flank_patch, verify_contacts
-from prs_geom.contact import part_flanks
+import prs_geom.checks.fcl as fv
+from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread, default_design
+from prs_geom.model.io import load_design
+from prs_geom.model.errors import DesignWarning
+from prs_geom.checks.fcl import Comparison, check_comparisons, flank_patch, verify_contacts
+from prs_geom.analysis.contact import part_flanks
 from strategies import standard_designs
 
 EXAMPLES = __import__("pathlib").Path(__file__).parent.parent / "examples"

@@ -20,8 +20,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run
-from prs_geom.design import MeshSettings, PRSDesign, Roller, Thread
-from prs_geom.designio import design_to_dict, dumps_toml, load_design, toml_string
+from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
+from prs_geom.model.io import design_to_dict, dumps_toml, toml_string
+from prs_geom.pipeline import load_any_design as load_design
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 TINY = PRSDesign(name="tiny", thread=Thread(engaged_teeth=3), roller=Roller(count=3),

@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prs_geom.helix import PitchWarp, identity_warp
+from prs_geom.geometry.helix import PitchWarp, identity_warp
 
 
 lists = st.integers(2, 25).flatmap(

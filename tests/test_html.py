@@ -6,7 +6,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from prs_geom.design import MeshSettings, PRSDesign, Roller
+from prs_geom.model.design import MeshSettings, PRSDesign, Roller
 from prs_geom.pipeline import build
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")

@@ -9,10 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run
-from prs_geom.design import Loading, default_design
-from prs_geom.designio import load_design
-from prs_geom.errors import ConvergenceError
-from prs_geom.loads import (build_model, closed_form_equal_load, design_pitches, ellipticity, forward,
+from prs_geom.model.design import Loading, default_design
+from prs_geom.model.io import load_design
+from prs_geom.model.errors import ConvergenceError
+from prs_geom.analysis.loads import (build_model, closed_form_equal_load, design_pitches, ellipticity, forward,
                             gap_terms, hertz_constant, loads_report, solve_loads, with_pitch_lists,
                             yamamoto_compliance)
 from strategies import standard_designs
@@ -209,9 +209,9 @@ def test_loads_cli_table_and_json():
 
 
 # --------------------------------------------------------------------------- the complementarity solver
-from prs_geom.design import PRSDesign, Thread  # noqa: E402
-from prs_geom.errors import DesignError  # noqa: E402
-from prs_geom.loads import (block_compliance, gap_terms_rollers, iteration_bound, off_design,  # noqa: E402
+from prs_geom.model.design import PRSDesign, Thread  # noqa: E402
+from prs_geom.model.errors import DesignError  # noqa: E402
+from prs_geom.analysis.loads import (block_compliance, gap_terms_rollers, iteration_bound, off_design,  # noqa: E402
                             pitch_error_sensitivity, sensitivity_chunks, solve_loads_batch, solve_loads_rollers)
 
 INSTALLATIONS = ("tension-compression", "compression-compression")

@@ -4,11 +4,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prs_geom.designio import load_design
-from prs_geom.machining import COLUMNS, machining_sheets
+from prs_geom.model.io import load_design
+from prs_geom.analysis.machining import COLUMNS, machining_sheets
 from prs_geom.pipeline import build
-from prs_geom.profiles import ThreadProfiles
-from prs_geom.sheets import read_sheet_csv, read_xlsx
+from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.exports.sheets import read_sheet_csv, read_xlsx
 
 EXAMPLES = Path(__file__).parent.parent / "examples"
 

@@ -8,12 +8,13 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from prs_geom.assembly import build_part, part_warps, thread_length
-from prs_geom.contact import PartFlanks
-from prs_geom.design import PRSDesign, Roller, Nut, Screw, Thread, default_design
-from prs_geom.designio import load_design
-from prs_geom.errors import DesignError
-from prs_geom.mesh import (FACE_THREAD, analytic_thread_volume, axial_line_crossings,
+from prs_geom.geometry.frames import part_warps, thread_length
+from prs_geom.mesh.assembly import build_part
+from prs_geom.analysis.contact import PartFlanks
+from prs_geom.model.design import PRSDesign, Roller, Nut, Screw, Thread, default_design
+from prs_geom.model.io import load_design
+from prs_geom.model.errors import DesignError
+from prs_geom.mesh.thread import (FACE_THREAD, analytic_thread_volume, axial_line_crossings,
                            manifold_status, measure_deviation, mesh_report, profile_distance)
 from strategies import standard_designs
 
@@ -197,7 +198,7 @@ def test_end_faces_are_planar_and_contain_corner_points(part):
 def test_fine_tolerance_assembly_meshes(heavy_scale):
     """The default design's parts at the finest benchmark tolerance (0.5 um; CI: 2 um):
     closed, accepted by manifold3d, within tolerance everywhere."""
-    from prs_geom.assembly import build_assembly
+    from prs_geom.mesh.assembly import build_assembly
     tol = 0.0005 if heavy_scale == "full" else 0.002
     asm = build_assembly(default_design(), tol=tol, gears=False)
     for part, tm in asm.parts.items():

@@ -3,9 +3,9 @@ import json
 
 import pytest
 
-from prs_geom.design import Loading, Nut, PRSDesign, Roller, Screw, Thread
-from prs_geom.designio import load_design
+from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread
 from prs_geom.pipeline import STAGES, build
+from prs_geom.pipeline import load_any_design as load_design
 
 DESIGNS = {
     "left-hand-cc": lambda: PRSDesign(name="lh", thread=Thread(hand="left"),

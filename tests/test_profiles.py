@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from prs_geom.design import default_design
-from prs_geom.profiles import ThreadProfiles
+from prs_geom.model.design import default_design
+from prs_geom.geometry.profiles import ThreadProfiles
 from strategies import standard_designs
 
 

@@ -14,9 +14,9 @@ import jsonschema
 import pytest
 
 from prs_geom import pipeline
-from prs_geom.design import PRSDesign
-from prs_geom.designio import load_design
-from prs_geom.report_schema import load_schema, validate_report
+from prs_geom.model.design import PRSDesign
+from prs_geom.exports.report_schema import load_schema, validate_report
+from prs_geom.pipeline import load_any_design as load_design
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 BUDGET = 4 * 2 ** 30

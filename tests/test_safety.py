@@ -15,9 +15,9 @@ from pathlib import Path
 import pytest
 
 from cli_helpers import run
-from prs_geom.design import MeshSettings, PRSDesign, Roller, Thread
-from prs_geom.designio import dumps_toml, save_design
-from prs_geom.output import MANIFEST_NAME, AtomicOutputDir, OutputRefused, clean_stale
+from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
+from prs_geom.model.io import dumps_toml, save_design
+from prs_geom.exports.output import MANIFEST_NAME, AtomicOutputDir, OutputRefused, clean_stale
 
 #: A design that builds in a few seconds (3 teeth, 3 rollers, coarse mesh).
 TINY = PRSDesign(name="tiny", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
@@ -271,8 +271,8 @@ def test_tiny_chord_tolerance_is_refused_against_a_small_budget(tmp_path):
 
 
 def test_estimate_matches_built_meshes_and_bounds_memory():
-    from prs_geom.assembly import build_part
-    from prs_geom.resources import estimate, part_triangles
+    from prs_geom.mesh.assembly import build_part
+    from prs_geom.mesh.budget import estimate, part_triangles
 
     for d in (TINY, PRSDesign(thread=Thread(engaged_teeth=8, flank_half_angle_deg=35.0))):
         est = part_triangles(d, d.mesh.chord_tolerance_mm)
@@ -321,7 +321,7 @@ def test_debug_is_accepted_after_the_subcommand(tmp_path):
 def test_check_over_tolerance_becomes_a_warning_everywhere(tmp_path, tiny_file, monkeypatch):
     """A check whose measured difference exceeds its tolerance reaches report.json, the
     console and report.html (forced here by a mesh check row that carries a warning)."""
-    import prs_geom.mesh as mesh_mod
+    import prs_geom.mesh.thread as mesh_mod
 
     real = mesh_mod.mesh_report
 

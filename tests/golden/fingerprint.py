@@ -93,9 +93,9 @@ def compare_numbers(a: Any, b: Any, path: str = "report", rtol: float = 1e-12) -
 
 
 def build_fingerprint(key: str, out: Path) -> dict[str, Any]:
-    from prs_geom.design import default_design
-    from prs_geom.designio import load_design
+    from prs_geom.model.design import default_design
     from prs_geom.pipeline import build
+    from prs_geom.pipeline import load_any_design as load_design
 
     design = default_design() if DESIGNS[key] is None else load_design(EXAMPLES / DESIGNS[key])
     build(design, out, memory_budget=8 * 2 ** 30)

@@ -1,0 +1,9 @@
+"""Analysis: the numbers a designer trusts, from the analytic geometry.
+
+Owns the contact points and the screw's theoretical pitch diameter
+(:mod:`~prs_geom.analysis.contact`), the load distribution and graded-pitch design
+(:mod:`~prs_geom.analysis.loads` with its complementarity solver
+:mod:`~prs_geom.analysis.load_solver`) and the machining data
+(:mod:`~prs_geom.analysis.machining`). Pure numpy/scipy: importing it loads no mesh
+library (trimesh, FCL, manifold3d) and does no I/O; each stage returns a frozen result.
+"""

@@ -1,0 +1,531 @@
+"""Load distribution over the thread teeth and equal-load pitch design (DOMAIN.md section 4).
+
+Pure math, no I/O.
+
+Load path and signs (fixed here, used everywhere)
+-------------------------------------------------
+Tooth 1 is at the loaded end (z = 0), tooth n at the far end. The external load F0 is
+carried screw -> rollers -> nut and flows toward -z: the screw tooth above each roller
+tooth presses it down (roller *upper* flank, the "upper" screw-roller contact of
+:mod:`prs_geom.contact`), and the roller tooth presses the nut tooth below it (roller
+*lower* flank, nut tooth j the one below roller tooth j). The nut is supported at the
+loaded end, so its body is in compression; the screw is pulled at the loaded end
+(tension-compression: body in tension) or pushed at the far end (compression-compression).
+All rollers carry the same loads (one roller is modelled): f_nr,j (nut-roller) and
+f_rs,j (roller-screw), axial components, N. :func:`solve_loads_rollers` models all z rollers
+side by side instead (own gaps and body each, shared nut and screw bodies).
+
+Compatibility between teeth j and j + 1 (D = contact + tooth deflection, axial, mm):
+
+    D_nr(f_nr,j) - D_nr(f_nr,j+1) = d_n,j + d_r,j + (p_r,j - p_n,j)
+    D_rs(f_rs,j) - D_rs(f_rs,j+1) = s d_s,j - d_r,j + (p_s - p_r,j)
+
+with the body deformations over one pitch d_i,j = N_i,j p / (E_i A_i), segment forces
+N_n,j = z sum_{k>j} f_nr,k (compression), N_r,j = sum_{k>j} (f_nr,k - f_rs,k) (tension),
+N_s,j = z sum_{k>j} f_rs,k (tension-compression, s = +1) or z sum_{k<=j} f_rs,k
+(compression-compression, s = -1); equilibrium sum f_nr = sum f_rs = F0 / z.
+
+Equal load (every coefficient 1): contact and tooth terms cancel and d_r = 0, so
+
+    p_r,j = p_s + F0 p (n - j) / (n E_s A_s)     (tension-compression)
+    p_r,j = p_s - F0 p j / (n E_s A_s)           (compression-compression)
+    p_n,j = p_r,j + F0 p (n - j) / (n E_n A_n)   (both)
+
+DOMAIN.md writes the nut relation with a minus sign and leaves the convention open; with
+the nut supported at the loaded end the far nut teeth move toward the support the most,
+so they must start closer to the roller teeth: the nut pitch is the larger one.
+
+Compliances
+-----------
+* Hertz point contact of the roller's spherical flank (radius r_T) with the screw's or
+  nut's straight flank, curvatures 1/r_T, 1/r_T and 0, +-sin(beta)/r_c at the actual contact
+  radius r_c of the contact solver; ellipticity k from the complete elliptic integrals
+  (scipy); normal approach delta = C Q^(2/3); the axial load is F = Q n_z, with n_z the axial
+  component of the contact normal from the contact solver (about cos(beta) cos(lambda)), so
+  the axial approach is C (F / n_z)^(2/3) / n_z.
+* Thread teeth (Yamamoto, Appendix A): bending, shear, root tilt, root shear and radial
+  terms. Yamamoto's terms are per unit circumferential width. Width convention: a roller's
+  tooth load is spread over pi d_s / z on the screw and pi d_n / z on the nut (the z rollers
+  share the circumference) and over the whole roller circumference pi d_r on the roller.
+  Tooth geometry at the load line: b = axial tooth thickness at the contact radius,
+  c = radial distance from the root to the contact radius, a = b + 2 c tan(beta).
+  :class:`LoadModel` may instead carry a dense symmetric positive semi-definite linear
+  compliance of the 2n contact pairs (``compliance``, e.g. from a finite-element influence
+  matrix); Hertz stays the diagonal nonlinear term.
+* Bodies: screw and roller root sections pi d_root^2 / 4, nut pi (D0^2 - d_root^2) / 4 with
+  d_root the nut's groove-root (major) diameter.
+
+The tooth loads are the solution of a complementarity problem, solved by
+:mod:`prs_geom.analysis.load_solver` (its docstring states the energy, the method and why
+it terminates).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import optimize, special
+
+from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, LoadResult, RollerLoadResult,
+                                           block_compliance, chunk_size, iteration_bound, solve_loads, solve_loads_batch,
+                                           solve_loads_rollers)
+from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.errors import DesignError
+from prs_geom.progress import ProgressFn
+
+__all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResult", "block_compliance",
+           "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
+           "forward", "gap_terms", "gap_terms_rollers", "axial_stiffness", "design_pitches",
+           "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
+           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
+           "yamamoto_compliance", "sensitivity_chunks"]
+
+
+# --------------------------------------------------------------------------- Hertz
+def ellipticity(F_rho: float) -> float:
+    """k >= 1 with F(rho) = [(k^2 + 1) E(e) - 2 K(e)] / [(k^2 - 1) E(e)], e^2 = 1 - 1/k^2."""
+    if F_rho <= 1e-12:
+        return 1.0
+
+    def f(k: float) -> float:
+        m = 1.0 - 1.0 / (k * k)
+        E, K = special.ellipe(m), special.ellipk(m)
+        return ((k * k + 1.0) * E - 2.0 * K) / ((k * k - 1.0) * E) - F_rho
+
+    return optimize.brentq(f, 1.0 + 1e-9, 1e4, xtol=1e-14, rtol=1e-15)
+
+
+def hertz_constant(curvatures: Sequence[float], eta: float) -> tuple[float, dict[str, float]]:
+    """C with normal approach delta = C Q^(2/3) (mm, Q in N) for principal curvatures
+    (rho11, rho12, rho21, rho22) (1/mm) and eta = sum (1 - nu^2)/E (1/MPa)."""
+    r11, r12, r21, r22 = curvatures
+    sum_rho = r11 + r12 + r21 + r22
+    if sum_rho <= 0:
+        raise DesignError("roller.arc_radius_mm", None, "the contact curvature sum must be positive")
+    F_rho = (abs(r11 - r12) + abs(r21 - r22)) / sum_rho
+    k = ellipticity(F_rho)
+    m = 1.0 - 1.0 / (k * k)
+    E, K = float(special.ellipe(m)), float(special.ellipk(m))
+    C = (2.0 * K / math.pi) * (math.pi / (2.0 * k * k * E)) ** (1.0 / 3.0) \
+        * (3.0 * eta / (2.0 * sum_rho)) ** (2.0 / 3.0) * sum_rho / 2.0
+    return C, {"sum_rho_per_mm": sum_rho, "F_rho": F_rho, "ellipticity_k": k}
+
+
+# --------------------------------------------------------------------------- Yamamoto
+def yamamoto_compliance(beta: float, a: float, b: float, c: float, P: float, d: float,
+                        E: float, nu: float, nut_outer: float | None = None) -> dict[str, float]:
+    """Axial tooth deflection per unit load per unit width, mm / (N/mm), term by term."""
+    ta = math.tan(beta)
+    cot = 1.0 / ta
+    lam1 = (1 - nu ** 2) * 3.0 / (4.0 * E) * ((1 - (2 - b / a) ** 2 + 2 * math.log(a / b)) * cot ** 3
+                                               - 4 * (c / a) ** 2 * ta)
+    lam2 = (1 + nu) * 6.0 / (5.0 * E) * cot * math.log(a / b)
+    lam3 = (1 - nu ** 2) * 12.0 * c / (math.pi * E * a ** 2) * (c - 0.5 * b * ta)
+    lam4 = (1 - nu ** 2) * 2.0 / (math.pi * E) * ((P / a) * math.log((P + 0.5 * a) / (P - 0.5 * a))
+                                                  + 0.5 * math.log(4 * P ** 2 / a ** 2 - 1))
+    if nut_outer is None:
+        lam5 = (1 - nu) * ta ** 2 / 2.0 * (d / P) / E
+    else:
+        lam5 = ((nut_outer ** 2 + d ** 2) / (nut_outer ** 2 - d ** 2) + nu) * ta ** 2 / 2.0 * (d / P) / E
+    return {"bending": lam1, "shear": lam2, "root_tilt": lam3, "root_shear": lam4, "radial": lam5}
+
+
+
+
+def _section_areas(design: PRSDesign) -> dict[str, float]:
+    return {
+        "screw": math.pi * design.screw.minor_diameter_mm ** 2 / 4.0,
+        "roller": math.pi * design.roller.minor_diameter_mm ** 2 / 4.0,
+        "nut": math.pi * (design.nut.outer_diameter_mm ** 2 - design.nut.major_diameter_mm ** 2) / 4.0,
+    }
+
+
+def build_model(design: PRSDesign, contact: ContactResult | None = None) -> LoadModel:
+    """Compliances of a design, with the contact geometry of the contact stage (solved here
+    when ``contact`` is not given)."""
+    contact = contact if contact is not None else analyse_contact(design)
+    prof = ThreadProfiles.from_design(design)
+    mats = design.materials
+    beta = design.thread.beta
+    p = design.thread.pitch_mm
+    z = design.roller.count
+    theo = contact.theoretical
+    c_rs = contact.screw_roller["upper_at_theoretical"]
+    c_nr = contact.roller_nut["lower"]
+    rt = design.roller.arc_radius_mm
+    sb = math.sin(beta)
+    eta_rs = (1 - mats.roller.poisson_ratio ** 2) / mats.roller.youngs_modulus_mpa + \
+        (1 - mats.screw.poisson_ratio ** 2) / mats.screw.youngs_modulus_mpa
+    eta_nr = (1 - mats.roller.poisson_ratio ** 2) / mats.roller.youngs_modulus_mpa + \
+        (1 - mats.nut.poisson_ratio ** 2) / mats.nut.youngs_modulus_mpa
+    C_rs, h_rs = hertz_constant((1 / rt, 1 / rt, 0.0, sb / c_rs.part_radius_mm), eta_rs)
+    C_nr, h_nr = hertz_constant((1 / rt, 1 / rt, 0.0, -sb / c_nr.part_radius_mm), eta_nr)
+    nz_rs, nz_nr = abs(c_rs.normal[2]), abs(c_nr.normal[2])
+    hertz_rs = C_rs * nz_rs ** (-5.0 / 3.0)
+    hertz_nr = C_nr * nz_nr ** (-5.0 / 3.0)
+
+    def tooth(part: str, r_c: float, width: float, profile) -> tuple[float, dict[str, float]]:
+        b = 2.0 * float(profile.tooth_half_width(r_c))
+        c = abs(r_c - profile.root_radius)
+        a = b + 2.0 * c * math.tan(beta)
+        mat = getattr(mats, part)
+        terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
+                                    mat.poisson_ratio,
+                                    design.nut.outer_diameter_mm if part == "nut" else None)
+        return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
+                                             **{k: v / width for k, v in terms.items()}}
+
+    t_s, d_s = tooth("screw", c_rs.part_radius_mm, math.pi * 2 * theo.profile.pitch_radius / z, theo.profile)
+    t_rs_r, d_rs_r = tooth("roller", c_rs.roller_radius_mm, math.pi * design.roller.pitch_diameter_mm, prof.roller)
+    t_nr_r, d_nr_r = tooth("roller", c_nr.roller_radius_mm, math.pi * design.roller.pitch_diameter_mm, prof.roller)
+    t_n, d_n = tooth("nut", c_nr.part_radius_mm, math.pi * design.nut.pitch_diameter_mm / z, prof.nut)
+    A = _section_areas(design)
+    inst = design.loading.installation
+    return LoadModel(
+        n=design.thread.engaged_teeth, z=z, pitch=p,
+        sign_screw=1 if inst == "tension-compression" else -1,
+        hertz_nr=hertz_nr, hertz_rs=hertz_rs, tooth_nr=t_nr_r + t_n, tooth_rs=t_rs_r + t_s,
+        body_screw=p / (mats.screw.youngs_modulus_mpa * A["screw"]),
+        body_roller=p / (mats.roller.youngs_modulus_mpa * A["roller"]),
+        body_nut=p / (mats.nut.youngs_modulus_mpa * A["nut"]),
+        details={"hertz_rs": {**h_rs, "normal_axial_component": nz_rs, "C_normal": C_rs},
+                 "hertz_nr": {**h_nr, "normal_axial_component": nz_nr, "C_normal": C_nr},
+                 "tooth_screw": d_s, "tooth_roller_screw_side": d_rs_r,
+                 "tooth_roller_nut_side": d_nr_r, "tooth_nut": d_n, "section_areas_mm2": A},
+    )
+
+
+
+def gap_terms(design: PRSDesign, roller: Sequence[float] | None = None,
+              nut: Sequence[float] | None = None) -> tuple[NDArray, NDArray]:
+    """Cumulative initial gaps g_j = sum_{k<j} (p_r,k - p_n,k) and
+    g'_j = sum_{k<j} (p_s - p_r,k), as differences (full precision), mm.
+
+    ``roller`` / ``nut`` may carry a leading batch axis ((B, n - 1) pitch lists): the gaps
+    then have shape (B, n), computed row by row exactly as for one list."""
+    p = design.thread.pitch_mm
+    pr = np.asarray(roller if roller is not None else design.pitch_list("roller"), dtype=np.float64)
+    pn = np.asarray(nut if nut is not None else design.pitch_list("nut"), dtype=np.float64)
+    pr, pn = np.broadcast_arrays(pr, pn)
+    zero = np.zeros(pr.shape[:-1] + (1,))
+    g_nr = np.concatenate([zero, np.cumsum((pr - p) - (pn - p), axis=-1)], axis=-1)
+    g_rs = np.concatenate([zero, np.cumsum(-(pr - p), axis=-1)], axis=-1)
+    return g_nr, g_rs
+
+
+def gap_terms_rollers(design: PRSDesign, roller: NDArray | None = None,
+                      nut: Sequence[float] | None = None) -> tuple[NDArray, NDArray]:
+    """(z, n) gaps of every roller from per-roller pitch lists ``roller`` (z, n - 1) (None:
+    the design's list for all) and the nut's list."""
+    z = design.roller.count
+    pr = np.asarray(design.pitch_list("roller") if roller is None else roller, dtype=np.float64)
+    pr = np.broadcast_to(pr, (z, design.thread.engaged_teeth - 1))
+    return gap_terms(design, pr, nut)
+
+
+def forward(design: PRSDesign, load: float | None = None, model: LoadModel | None = None,
+            roller: Sequence[float] | None = None, nut: Sequence[float] | None = None,
+            linear_at: float | None = None) -> LoadResult:
+    """Tooth loads of ``design`` (or with other pitch lists) at ``load`` (N, default design load)."""
+    model = model or build_model(design)
+    g_nr, g_rs = gap_terms(design, roller, nut)
+    return solve_loads(model, design.loading.axial_load_n if load is None else load, g_nr, g_rs,
+                       linear_at=linear_at)
+
+
+def axial_stiffness(design: PRSDesign, model: LoadModel | None = None, load: float | None = None) -> dict[str, float]:
+    """Secant F0 / delta and tangent dF/d delta axial stiffness of the engaged threads (N/um)."""
+    model = model or build_model(design)
+    F = design.loading.axial_load_n if load is None else load
+    g_nr, g_rs = gap_terms(design)
+    b = solve_loads_batch(model, np.array([F, F * 1.001]), np.stack([g_nr, g_nr]), np.stack([g_rs, g_rs]))
+    d1, d2 = (float(v) for v in b.axial_deflection_mm)
+    return {"secant_N_per_um": F / d1 / 1e3,
+            "tangent_N_per_um": (0.001 * F) / (d2 - d1) / 1e3,
+            "axial_deflection_um": d1 * 1e3}
+
+
+# --------------------------------------------------------------------------- inverse
+@dataclass(frozen=True)
+class PitchDesign:
+    roller_mm: tuple[float, ...]
+    nut_mm: tuple[float, ...]
+    screw_mm: float
+    target_nr: NDArray
+    target_rs: NDArray
+
+
+def design_pitches(design: PRSDesign, target_nr: Sequence[float] | None = None,
+                   target_rs: Sequence[float] | None = None, model: LoadModel | None = None) -> PitchDesign:
+    """Pitch lists of roller and nut that give the target coefficients at the design load.
+
+    Targets are load-distribution coefficients per tooth (mean 1; None = equal). The tooth
+    loads are fixed by the target, so the compatibility equations give the pitch
+    differences directly: x = B f (DOMAIN.md section 4).
+    """
+    model = model or build_model(design)
+    n, z = model.n, model.z
+    F0 = design.loading.axial_load_n
+    mean = F0 / (n * z)
+    t_nr = np.ones(n) if target_nr is None else np.asarray(target_nr, dtype=np.float64)
+    t_rs = np.ones(n) if target_rs is None else np.asarray(target_rs, dtype=np.float64)
+    for name, t in (("target.nut_roller", t_nr), ("target.roller_screw", t_rs)):
+        if t.shape != (n,):
+            raise DesignError(name, list(t), f"must have engaged_teeth = {n} coefficients")
+        if not np.all(np.isfinite(t)) or np.any(t <= 0):
+            raise DesignError(name, list(t), "coefficients must be finite and > 0")
+        if abs(t.mean() - 1.0) > 1e-9:
+            raise DesignError(name, list(t), f"coefficients must average 1 (mean is {t.mean():.12g})")
+    f = np.concatenate([t_nr, t_rs]) * mean
+    Snr, Srs = model.body_matrices()
+    # per-tooth body terms d_j = S_{j+1} - S_j
+    body_nr = np.diff(Snr @ f)
+    body_rs = np.diff(Srs @ f)
+    D_nr = model.deflection("nr", f[:n])
+    D_rs = model.deflection("rs", f[n:])
+    p = design.thread.pitch_mm
+    # D_j - D_{j+1} = body_j + (gap step):  gap step nr = p_r - p_n, rs = p_s - p_r
+    step_rs = (D_rs[:-1] - D_rs[1:]) - body_rs      # p_s - p_r,j
+    step_nr = (D_nr[:-1] - D_nr[1:]) - body_nr      # p_r,j - p_n,j
+    corr_r = -step_rs                                # p_r,j - p  (p_s = p)
+    corr_n = corr_r - step_nr                        # p_n,j - p
+    return PitchDesign(tuple(float(p + c) for c in corr_r), tuple(float(p + c) for c in corr_n),
+                       p, t_nr, t_rs)
+
+
+def closed_form_equal_load(design: PRSDesign) -> tuple[NDArray, NDArray]:
+    """The equal-load corrections p_r,j - p and p_n,j - p (mm) in closed form (module doc)."""
+    n = design.thread.engaged_teeth
+    p = design.thread.pitch_mm
+    F0 = design.loading.axial_load_n
+    A = _section_areas(design)
+    Es, En = design.materials.screw.youngs_modulus_mpa, design.materials.nut.youngs_modulus_mpa
+    j = np.arange(1, n)
+    if design.loading.installation == "tension-compression":
+        cr = F0 * p * (n - j) / (n * Es * A["screw"])
+    else:
+        cr = -F0 * p * j / (n * Es * A["screw"])
+    cn = cr + F0 * p * (n - j) / (n * En * A["nut"])
+    return cr, cn
+
+
+def with_pitch_lists(design: PRSDesign, pd: PitchDesign, name: str | None = None) -> PRSDesign:
+    """A new design carrying the designed pitch lists."""
+    return design.with_changes(
+        name=name or design.name,
+        roller=replace(design.roller, pitch_list_mm=pd.roller_mm),
+        nut=replace(design.nut, pitch_list_mm=pd.nut_mm),
+    )
+
+
+
+
+# --------------------------------------------------------------------------- reports
+def off_design(design: PRSDesign, fractions: Sequence[float] = (0.25, 0.5, 1.0, 1.5),
+               model: LoadModel | None = None) -> list[dict[str, Any]]:
+    """Coefficients of the design's pitch lists at other loads (one batched solve)."""
+    model = model or build_model(design)
+    F0 = design.loading.axial_load_n
+    fractions = list(fractions)
+    if not fractions:
+        return []
+    g_nr, g_rs = gap_terms(design)
+    B = len(fractions)
+    b = solve_loads_batch(model, np.array([fr * F0 for fr in fractions]), np.tile(g_nr, (B, 1)),
+                          np.tile(g_rs, (B, 1)))
+    out = []
+    for i, fr in enumerate(fractions):
+        r = b[i]
+        out.append({"load_fraction": fr, "load_N": fr * F0,
+                    "ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist(),
+                    "max_ldc": float(max(r.ldc_nr.max(), r.ldc_rs.max())),
+                    "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum())})
+    return out
+
+
+def _sensitivity_gaps(design: PRSDesign, error_mm: float) -> tuple[NDArray, NDArray]:
+    """Gaps (2(n-1), n) with one roller pitch (rows 0..n-2) or one nut pitch (rows n-1..)
+    off by ``error_mm``, computed exactly as :func:`gap_terms` of the perturbed lists."""
+    pr = np.array(design.pitch_list("roller"))
+    pn = np.array(design.pitch_list("nut"))
+    k = len(pr)
+    R = np.tile(pr, (2 * k, 1))
+    N = np.tile(pn, (2 * k, 1))
+    j = np.arange(k)
+    R[j, j] += error_mm
+    N[k + j, j] += error_mm
+    return gap_terms(design, R, N)
+
+
+def sensitivity_chunks(design: PRSDesign, model: LoadModel | None = None, memory_mb: float = MEMORY_MB) -> int:
+    """Number of batch chunks :func:`pitch_error_sensitivity` solves (its progress steps)."""
+    n = design.thread.engaged_teeth
+    B = 2 * (n - 1)
+    if B == 0:
+        return 0
+    kind = "dense" if model is not None and model.compliance is not None else "banded"
+    return -(-B // chunk_size(1, n, kind, memory_mb))
+
+
+def pitch_error_sensitivity(design: PRSDesign, error_mm: float = 1e-3, model: LoadModel | None = None,
+                            progress: ProgressFn | None = None, memory_mb: float = MEMORY_MB) -> dict[str, Any]:
+    """Largest change of any coefficient when one roller or nut pitch is off by ``error_mm``.
+
+    All 2 (n - 1) perturbed designs are one batched solve, cut into chunks within
+    ``memory_mb``; ``progress("sensitivity", samples done, 2 (n - 1))`` after each chunk."""
+    model = model or build_model(design)
+    base = forward(design, model=model)
+    k = design.thread.engaged_teeth - 1
+    worst = {"roller": (0.0, 0), "nut": (0.0, 0)}
+    if k > 0:
+        g_nr, g_rs = _sensitivity_gaps(design, error_mm)
+        b = solve_loads_batch(model, design.loading.axial_load_n, g_nr, g_rs, memory_mb=memory_mb,
+                              progress=progress, stage="sensitivity", start=base)
+        dl = np.maximum(np.abs(b.ldc_nr - base.ldc_nr).max(axis=1), np.abs(b.ldc_rs - base.ldc_rs).max(axis=1))
+        for i, part in enumerate(("roller", "nut")):
+            v = dl[i * k:(i + 1) * k]
+            j = int(np.argmax(v))
+            if v[j] > 0.0:
+                worst[part] = (float(v[j]), j + 1)
+    return {"pitch_error_um": error_mm * 1e3,
+            **{f"max_ldc_change_{k_}": v[0] for k_, v in worst.items()},
+            **{f"worst_pitch_index_{k_}": v[1] for k_, v in worst.items()}}
+
+
+def loads_report(design: PRSDesign, model: LoadModel | None = None,
+                 progress: ProgressFn | None = None) -> dict[str, Any]:
+    """The ``loads`` section of report.json.
+
+    ``progress("loads", done, total)`` is called after every sub-step: base solve, constant
+    pitch, linear model, stiffness, each off-design load and each chunk of the sensitivity
+    study."""
+    model = model or build_model(design)
+    fractions = (0.25, 0.5, 1.0, 1.5)
+    total = 4 + len(fractions) + sensitivity_chunks(design, model)
+    count = [0]
+
+    def tick(*_: Any) -> None:
+        count[0] += 1
+        if progress is not None:
+            progress("loads", min(count[0], total), total)
+
+    r = forward(design, model=model)
+    tick()
+    const = design.with_changes(roller=replace(design.roller, pitch_list_mm=None),
+                                nut=replace(design.nut, pitch_list_mm=None))
+    rc = forward(const, model=model)
+    tick()
+    lin = forward(design, model=model, linear_at=r.mean)
+    tick()
+    stiffness = axial_stiffness(design, model)
+    tick()
+    off = off_design(design, fractions, model=model)
+    for _ in off:
+        tick()
+    sens = pitch_error_sensitivity(design, model=model, progress=tick)
+    return {
+        "design_load_N": design.loading.axial_load_n,
+        "installation": design.loading.installation,
+        "ldc_nut_roller": r.ldc_nr.tolist(),
+        "ldc_roller_screw": r.ldc_rs.tolist(),
+        "max_ldc": float(max(r.ldc_nr.max(), r.ldc_rs.max())),
+        "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
+        "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
+        "axial_stiffness_N_per_um": stiffness["secant_N_per_um"],
+        "axial_stiffness": stiffness,
+        "constant_pitch": {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
+                           "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))},
+        "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),
+                         "linearised_at_N": r.mean},
+        "off_design": off,
+        "sensitivity": sens,
+        "compliances": {"hertz_nr_mm_per_N2/3": model.hertz_nr, "hertz_rs_mm_per_N2/3": model.hertz_rs,
+                        "tooth_nr_mm_per_N": model.tooth_nr, "tooth_rs_mm_per_N": model.tooth_rs,
+                        "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
+                        "body_nut_mm_per_N": model.body_nut, "details": model.details},
+        "solver_iterations": r.iterations,
+    }
+
+
+@dataclass(frozen=True)
+class LoadsResult:
+    """The loads stage of a build, computed once and passed on.
+
+    ``result`` are the tooth loads at the design load with the design's pitch lists;
+    ``section`` the ``loads`` section of report.json; ``equal_load`` the pitch lists that
+    share equally at the design load. ``designed`` is what the plots show as the designed
+    state: the design's own lists for a graded design, else the equal-load design, with its
+    coefficients (``designed_ldc``), off-design rows and label.
+    """
+
+    model: LoadModel
+    result: LoadResult
+    section: dict[str, Any]
+    equal_load: PitchDesign
+    designed_ldc: dict[str, list[float]]
+    designed_off_design: list[dict[str, Any]]
+    designed_label: str
+    designed_roller_mm: tuple[float, ...]
+    designed_nut_mm: tuple[float, ...]
+
+    @property
+    def ldc_nut_roller(self) -> NDArray:
+        """Load-distribution coefficients of the nut-roller contacts, tooth 1 first."""
+        return self.result.ldc_nr
+
+    @property
+    def ldc_roller_screw(self) -> NDArray:
+        """Load-distribution coefficients of the roller-screw contacts, tooth 1 first."""
+        return self.result.ldc_rs
+
+    @property
+    def max_ldc(self) -> float:
+        """The worst coefficient of both sides."""
+        return float(self.section["max_ldc"])
+
+    def report(self) -> dict[str, Any]:
+        """The ``loads`` section of report.json."""
+        return self.section
+
+
+def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
+                  progress: ProgressFn | None = None) -> LoadsResult:
+    """The loads stage: forward solve, report section, equal-load design and the curves
+    of the designed state (see :class:`LoadsResult`)."""
+    model = build_model(design, contact)
+    section = loads_report(design, model, progress=progress)
+    result = forward(design, model=model)
+    equal = design_pitches(design, model=model)
+    if design.graded:
+        shown = {"ldc_nut_roller": section["ldc_nut_roller"], "ldc_roller_screw": section["ldc_roller_screw"]}
+        off, label = section["off_design"], "design pitch lists"
+        pr, pn = tuple(design.pitch_list("roller")), tuple(design.pitch_list("nut"))
+    else:
+        eq = with_pitch_lists(design, equal)
+        r = forward(eq, model=model)
+        shown = {"ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist()}
+        off, label = off_design(eq, model=model), "equal-load pitch design"
+        pr, pn = equal.roller_mm, equal.nut_mm
+    return LoadsResult(model, result, section, equal, shown, off, label, pr, pn)
+
+
+def design_pitch(design: PRSDesign, target: str | dict[str, Sequence[float]] = "equal",
+                 name: str | None = None, contact: ContactResult | None = None) -> PRSDesign:
+    """A new design whose roller and nut pitch lists give the target load sharing at the
+    design load: ``"equal"`` (every coefficient 1) or ``{"nut_roller": [...],
+    "roller_screw": [...]}`` (n coefficients each, mean 1). Named ``name`` or
+    ``<name>-graded``."""
+    if isinstance(target, str):
+        if target != "equal":
+            raise DesignError("target", target, 'must be "equal" or a mapping of coefficient lists')
+        t_nr = t_rs = None
+    else:
+        t_nr, t_rs = target.get("nut_roller"), target.get("roller_screw")
+    model = build_model(design, contact)
+    pd = design_pitches(design, t_nr, t_rs, model=model)
+    return with_pitch_lists(design, pd, name=name or f"{design.name}-graded")

@@ -1,0 +1,126 @@
+"""Pitch-modification machining data for roller and nut (DOMAIN.md section 5).
+
+Pure math, no I/O; the sheets are written by :mod:`prs_geom.sheets`.
+
+Process, per part:
+
+1. Cut the thread at constant pitch p_b = the smallest pitch of the part's list, with a tooth
+   thickness stock of Delta_n (the largest cumulative shift, below), so the base tooth j has
+   its mid-plane at (j - 1) p_b + Delta_n / 2 from the datum.
+2. Grind each flank to its designed position. Grinding only removes material, so a lower
+   flank (facing -z, toward the loaded end) can only move +z and an upper flank only -z.
+   With Delta_j = z_j - (j - 1) p_b >= 0 (z_j the designed position of tooth j, increasing in
+   j because every p_j >= p_b):
+   * lower flank: axial shift +Delta_j (datum tooth 1, shift 0);
+   * upper flank: axial shift Delta_j - Delta_n <= 0 (datum tooth n, shift 0).
+   Both flanks of every tooth end at the designed positions with the designed thickness,
+   matching the geometry model (rigid teeth on a warped helix coordinate).
+
+Normal stock at the contact point = |axial shift| * |n_z|, n_z the axial component of the
+unit contact normal from the contact solver (roller lower flank and nut flanks: roller-nut
+contact; roller upper flank: screw-roller contact with the theoretical screw).
+
+Datum: the lower flank of tooth 1 at the pitch diameter, at the reference angle theta = 0
+of the part frame (z = 0 at the loaded end). Inspection value: the axial position of the
+flank at the pitch diameter from the datum, at theta = 0 (mm).
+Loaded flanks (load path of :mod:`prs_geom.loads`): roller upper flank by the screw, roller
+lower flank by the nut; nut upper flank by the roller. The nut's lower flank carries no
+load; grinding it keeps the designed tooth thickness and may be skipped.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.model.design import PRSDesign
+from prs_geom.geometry.profiles import ThreadProfiles
+
+COLUMNS = [
+    ("tooth", "tooth", ""),
+    ("flank", "flank", ""),
+    ("loaded_by", "loaded by", ""),
+    ("designed_pitch_mm", "designed pitch to next tooth", "mm"),
+    ("base_pitch_mm", "base pitch (first cut)", "mm"),
+    ("designed_position_mm", "designed tooth position from datum", "mm"),
+    ("base_position_mm", "base tooth position from datum", "mm"),
+    ("axial_shift_um", "axial shift to produce", "um"),
+    ("normal_stock_um", "normal stock to remove at contact", "um"),
+    ("worked", "flank worked", ""),
+    ("inspection_position_mm", "inspection: flank axial position at pitch dia.", "mm"),
+]
+
+
+@dataclass(frozen=True)
+class MachiningSheet:
+    part: str
+    header: dict[str, Any]
+    rows: list[dict[str, Any]]
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"part": self.part, "header": self.header, "rows": self.rows}
+
+
+def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]) -> MachiningSheet:
+    """The sheet of ``part`` ("roller" or "nut"); ``normal_axial`` maps "screw" and "nut" to
+    the |n_z| of the screw-roller and roller-nut contacts."""
+    pl = np.asarray(design.pitch_list(part), dtype=np.float64)
+    n = len(pl) + 1
+    p_b = float(pl.min())
+    # positions as sums of small differences (full float64 precision for sub-um shifts)
+    z = np.concatenate([[0.0], np.cumsum(pl)])
+    delta = np.concatenate([[0.0], np.cumsum(pl - p_b)])
+    delta_n = float(delta[-1])
+    base = np.arange(n) * p_b
+    prof = getattr(ThreadProfiles.from_design(design), part)
+    t = float(prof.tooth_half_width(prof.pitch_radius))
+    loaded = {"roller": {"lower": "nut", "upper": "screw"}, "nut": {"lower": "-", "upper": "roller"}}[part]
+    nz = {"roller": {"lower": normal_axial["nut"], "upper": normal_axial["screw"]},
+          "nut": {"lower": normal_axial["nut"], "upper": normal_axial["nut"]}}[part]
+    rows = []
+    for j in range(n):
+        for flank in ("lower", "upper"):
+            shift = delta[j] if flank == "lower" else delta[j] - delta_n
+            side = -1.0 if flank == "lower" else 1.0
+            rows.append({
+                "tooth": j + 1,
+                "flank": flank,
+                "loaded_by": loaded[flank],
+                "designed_pitch_mm": float(pl[j]) if j < n - 1 else None,
+                "base_pitch_mm": p_b,
+                "designed_position_mm": float(z[j]),
+                "base_position_mm": float(base[j] + 0.5 * delta_n),
+                "axial_shift_um": float(shift * 1e3),
+                "normal_stock_um": float(abs(shift) * nz[flank] * 1e3),
+                "worked": bool(abs(shift) > 0.0),
+                # lower flank of tooth 1 is the datum: z_j + side t - (-t)
+                "inspection_position_mm": float(z[j] + side * t + t),
+            })
+    header = {
+        "part": part,
+        "design": design.name,
+        "units": "lengths mm, shifts and stock um",
+        "datum": "lower flank of tooth 1 at the pitch diameter, reference angle theta = 0 "
+                 "(tooth 1 at the loaded end)",
+        "base_pitch_mm": p_b,
+        "base_tooth_thickness_stock_um": delta_n * 1e3,
+        "pitch_diameter_mm": 2.0 * prof.pitch_radius,
+        "flank_half_angle_deg": design.thread.flank_half_angle_deg,
+        "teeth": n,
+        "tolerance": "axial flank position +-0.5 um (graded-pitch corrections are sub-um per tooth)",
+        "process": "cut at the base pitch with the thickness stock, then grind lower flanks +z "
+                   "(datum tooth 1) and upper flanks -z (datum tooth n)",
+        "constant_pitch": bool(np.all(pl == pl[0])),
+    }
+    return MachiningSheet(part, header, rows)
+
+
+def machining_sheets(design: PRSDesign, contact: ContactResult | None = None) -> dict[str, MachiningSheet]:
+    """Sheets of roller and nut, with the contact normals of the contact stage (solved here
+    when ``contact`` is not given)."""
+    contact = contact if contact is not None else analyse_contact(design)
+    nz = {"screw": abs(contact.screw_roller["upper_at_theoretical"].normal[2]),
+          "nut": abs(contact.roller_nut["lower"].normal[2])}
+    return {part: machining_sheet(design, part, nz) for part in ("roller", "nut")}

@@ -1,0 +1,124 @@
+"""DXF drawing of the thread profiles (ezdxf, DXF R2010, millimetres).
+
+Content: the half axial section of screw, roller and nut at the reference angle theta = 0
+over the full thread length with the designed (graded) pitches, and the normal-section
+tooth profile of each part. Each view is a named BLOCK (``SCREW_AXIAL``, ``ROLLER_AXIAL``,
+``NUT_AXIAL``, ``SCREW_NORMAL``, ``ROLLER_NORMAL``, ``NUT_NORMAL``) in its own part
+coordinates (X along the axis, Y the radius, mm) inserted into model space, so a CAD user
+can move the views and a reader can measure them without offsets.
+
+Entities: straight flanks, crests, roots and end lines as LINE; the roller flank as a true
+ARC in the normal section and a true ELLIPSE in the axial section (the normal-section circle
+stretched axially by 1 / cos(lambda): see :mod:`prs_geom.sections`); no polylines.
+Layers: ``PROFILE``, ``CENTRE`` (axis lines, linetype CENTER), ``PITCH`` (pitch lines,
+linetype DASHED), ``ANNOTATION`` (labels and the title block). Header: $INSUNITS = 4 (mm),
+$MEASUREMENT = 1 (metric).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import ezdxf
+from ezdxf import units
+
+from prs_geom._version import __version__
+from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
+from prs_geom.model.design import PRSDesign
+from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.geometry.sections import CircleArc, EllipseArc, Segment, axial_section, normal_section
+
+LAYERS = {"PROFILE": (7, "Continuous"), "CENTRE": (1, "CENTER"), "PITCH": (3, "DASHED"),
+          "ANNOTATION": (2, "Continuous")}
+TEXT_HEIGHT = 1.2
+
+
+def save_dxf(doc, path: Path) -> None:
+    """Save ``doc`` with its CLASSES section in a fixed order.
+
+    ezdxf registers the classes of the entity types in use by iterating a set, so their
+    order (and the file's bytes) would change with Python's string-hash seed from run to
+    run; registering them here first, required ones in ezdxf's order and the rest sorted,
+    makes the same drawing give the same file.
+    """
+    from ezdxf.sections.classes import REQ_R2004, REQUIRED_CLASSES
+
+    for name in REQUIRED_CLASSES.get(doc.dxfversion, REQ_R2004):
+        doc.classes.add_class(name)
+    for name in sorted(doc.entitydb.dxf_types_in_use()):
+        doc.classes.add_class(name)
+    doc.saveas(path)
+
+
+def _add(block, prims) -> None:
+    for pr in prims:
+        if isinstance(pr, Segment):
+            block.add_line(pr.start, pr.end, dxfattribs={"layer": "PROFILE"})
+        elif isinstance(pr, EllipseArc):
+            block.add_ellipse(center=(pr.centre[0], pr.centre[1]), major_axis=(pr.a, 0.0),
+                              ratio=pr.b / pr.a, start_param=pr.start, end_param=pr.end,
+                              dxfattribs={"layer": "PROFILE"})
+        elif isinstance(pr, CircleArc):
+            block.add_arc(center=pr.centre, radius=pr.radius, start_angle=pr.start_deg,
+                          end_angle=pr.end_deg, dxfattribs={"layer": "PROFILE"})
+
+
+def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None) -> None:
+    """Write the drawing; ``extra`` adds key numbers to the title block (e.g. the
+    theoretical screw pitch diameter)."""
+    doc = ezdxf.new("R2010", setup=True)
+    doc.units = units.MM
+    doc.header["$INSUNITS"] = 4
+    doc.header["$MEASUREMENT"] = 1
+    for name, (color, lt) in LAYERS.items():
+        doc.layers.add(name, color=color, linetype=lt)
+    msp = doc.modelspace()
+    prof = ThreadProfiles.from_design(design)
+    warps = part_warps(design)
+    p = design.thread.pitch_mm
+    L = thread_length(design)
+    zr = {"screw": screw_z_range(design), "roller": (0.0, L), "nut": (0.0, L)}
+    y = 0.0
+    x_detail = max(zr["screw"][1], L) + 15.0
+    placements = {}
+    for part in ("screw", "roller", "nut"):
+        pr = getattr(prof, part)
+        body = 0.5 * design.nut.outer_diameter_mm if part == "nut" else None
+        lo, hi = zr[part]
+        blk = doc.blocks.new(f"{part.upper()}_AXIAL")
+        _add(blk, axial_section(pr, warps[part], FIRST_MID_PITCHES[part] * p, lo, hi, body))
+        blk.add_line((lo - 3, 0), (hi + 3, 0), dxfattribs={"layer": "CENTRE"})
+        blk.add_line((lo - 1, pr.pitch_radius), (hi + 1, pr.pitch_radius), dxfattribs={"layer": "PITCH"})
+        blk.add_text(f"{part}: axial section at theta = 0, pitch dia. {2 * pr.pitch_radius:g} mm",
+                     height=TEXT_HEIGHT, dxfattribs={"layer": "ANNOTATION"}).set_placement(
+            (lo, (body or pr.outer_radius) + 2.0))
+        msp.add_blockref(blk.name, (0.0, y))
+        nb = doc.blocks.new(f"{part.upper()}_NORMAL")
+        _add(nb, normal_section(pr))
+        nb.add_line((0, pr.inner_radius - 1.0), (0, pr.outer_radius + 0.5), dxfattribs={"layer": "CENTRE"})
+        nb.add_line((-0.5 * p, pr.pitch_radius), (0.5 * p, pr.pitch_radius), dxfattribs={"layer": "PITCH"})
+        nb.add_text(f"{part}: normal section", height=0.3, dxfattribs={"layer": "ANNOTATION"}).set_placement(
+            (-0.5 * p, pr.outer_radius + 0.8))
+        msp.add_blockref(nb.name, (x_detail, y))
+        placements[part] = y
+        y += (body or pr.outer_radius) + 12.0
+    # title block
+    lines = [
+        f"prs_geom {__version__}  design: {design.name}",
+        f"units mm; pitch p = {p:g}; flank half-angle {design.thread.flank_half_angle_deg:g} deg; "
+        f"{design.thread.hand} hand; {design.thread.engaged_teeth} teeth; {design.roller.count} rollers",
+        f"pitch dia. screw {design.screw.pitch_diameter_mm:g} ({design.screw.starts} starts), roller "
+        f"{design.roller.pitch_diameter_mm:g}, nut {design.nut.pitch_diameter_mm:g} ({design.nut.starts} starts); "
+        f"roller arc r_T {design.roller.arc_radius_mm:.6g}",
+        "roller and nut drawn with their pitch lists (tooth 1 at the loaded end, X = 0)",
+    ]
+    for k, v in (extra or {}).items():
+        lines.append(f"{k}: {v}")
+    x0, y0 = 0.0, -8.0 - 2.0 * TEXT_HEIGHT * len(lines)
+    width = 160.0
+    msp.add_lwpolyline([(x0, y0), (x0 + width, y0), (x0 + width, -4.0), (x0, -4.0)], close=True,
+                       dxfattribs={"layer": "ANNOTATION"})
+    for i, text in enumerate(lines):
+        msp.add_text(text, height=TEXT_HEIGHT, dxfattribs={"layer": "ANNOTATION"}).set_placement(
+            (x0 + 2.0, -6.0 - 2.0 * TEXT_HEIGHT * (i + 1) + TEXT_HEIGHT))
+    save_dxf(doc, path)

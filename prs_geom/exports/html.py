@@ -1,0 +1,169 @@
+"""Self-contained HTML report (``report.html``): one file, no server, no network.
+
+Sections: design table, contact results, load-distribution plots (inline SVG), machining
+tables, and an interactive 3D view of the assembly. The 3D view is a small Canvas-2D
+renderer written here (orthographic projection, back-face culling, painter's sort, Lambert
+shading; drag to rotate, wheel to zoom): it needs no WebGL, so it works in any browser,
+headless ones included. Its mesh is a display tessellation of the assembly (coarser than
+the export meshes; the tolerance is stated on the page), embedded as base64 float32/uint32
+arrays, one mesh per distinct part and one transform per placed part.
+
+When the view has drawn its first frame it sets ``data-viewer="ok"`` and
+``data-triangles`` on ``<body>``; script errors are collected in ``#errors`` and
+``data-errors`` (the tests read these through a headless browser).
+"""
+from __future__ import annotations
+
+import base64
+import html
+import json
+import re
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from prs_geom.analysis.contact import ContactResult
+from prs_geom.analysis.loads import LoadsResult
+from prs_geom.analysis.machining import COLUMNS, MachiningSheet
+from prs_geom.mesh.assembly import build_assembly
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.io import design_to_dict
+
+#: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
+DISPLAY_TOLERANCE_MM = 0.1
+
+COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "simplified": "#b0b0b0"}
+
+
+def _b64(a: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(a).tobytes()).decode("ascii")
+
+
+def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM) -> dict[str, Any]:
+    asm = build_assembly(design, tol=tol)
+    meshes, index, instances = [], {}, []
+    for name, (mesh, T, kind) in asm.placed.items():
+        if id(mesh) not in index:
+            index[id(mesh)] = len(meshes)
+            meshes.append({"v": _b64(np.asarray(mesh.vertices, dtype=np.float32)),
+                           "f": _b64(np.asarray(mesh.faces, dtype=np.uint32))})
+        colour = COLOURS["simplified"] if kind == "simplified" else COLOURS[name.split("_")[0]]
+        instances.append({"name": name, "mesh": index[id(mesh)], "T": [float(x) for x in T.ravel()],
+                          "colour": colour, "cut": name.startswith("nut")})
+    tri = sum(len(asm.placed[i["name"]][0].faces) for i in instances)
+    return {"meshes": meshes, "instances": instances, "tolerance_mm": tol, "triangles": int(tri)}
+
+
+
+
+
+
+
+def _table(rows: list[list[Any]], header: list[str] | None = None) -> str:
+    out = ["<table>"]
+    if header:
+        out.append("<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
+    for r in rows:
+        cells = []
+        for i, v in enumerate(r):
+            if isinstance(v, float):
+                v = f"{v:.6g}"
+            cls = ' class="k"' if i == 0 else ""
+            cells.append(f"<td{cls}>{html.escape(str(v))}</td>")
+        out.append("<tr>" + "".join(cells) + "</tr>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def _flatten(d: dict[str, Any], prefix: str = "") -> list[list[Any]]:
+    rows = []
+    for k, v in d.items():
+        key = f"{prefix}.{k}" if prefix else k
+        if isinstance(v, dict):
+            rows += _flatten(v, key)
+        elif isinstance(v, list):
+            rows.append([key, ", ".join(f"{x:.9g}" if isinstance(x, float) else str(x) for x in v)])
+        else:
+            rows.append([key, v])
+    return rows
+
+
+def _template(name: str) -> str:
+    """A page template shipped in ``prs_geom/exports/templates`` (package data)."""
+    return resources.files("prs_geom.exports").joinpath("templates", name).read_text(encoding="utf-8")
+
+
+def _fill(template: str, values: dict[str, str]) -> str:
+    """Replace every ``{{name}}`` once (values are not scanned again)."""
+    return re.sub(r"\{\{(\w+)\}\}", lambda m: values[m.group(1)], template)
+
+
+def _svg(text: str) -> str:
+    """The ``<svg>`` element of an SVG file's text (without the XML prolog)."""
+    return text[text.index("<svg"):]
+
+
+def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
+               contact: ContactResult | None = None, loads: LoadsResult | None = None,
+               plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
+               mesh_checks: list[dict[str, Any]] | None = None) -> None:
+    """Write ``report.html`` from the stage results of a build.
+
+    ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
+    rendered them; the page shows them inline. Templates, style sheet and viewer script are
+    package data (``templates/report.html``, ``report.css``, ``viewer.js``).
+    """
+    parts = [f"<h1>Planetary roller screw '{html.escape(design.name)}'</h1>",
+             f"<p class='note'>prs_geom {html.escape(version)}. Units mm, N, MPa; "
+             f"tooth 1 at the loaded end.</p>",
+             "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
+             + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
+             if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
+             "<div id='errors'></div>",
+             "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas><div id='viewinfo' class='note'></div>"
+             "<label class='note'><input type='checkbox' id='cutaway' checked> cut the nut open</label>"]
+    if contact is not None:
+        c = contact.report()
+        sr = c["screw_roller"]
+        rows = []
+        for label, key, src in (("screw-roller upper, nominal", "upper_at_nominal", sr),
+                                ("screw-roller lower, nominal", "lower_at_nominal", sr),
+                                ("screw-roller upper, theoretical", "upper_at_theoretical", sr),
+                                ("roller-nut upper", "upper", c["roller_nut"]),
+                                ("roller-nut lower", "lower", c["roller_nut"])):
+            p = src[key]
+            rows.append([label, p["part_radius_mm"], p["part_angle_deg"], p["roller_radius_mm"],
+                         p["roller_angle_deg"], p["gap_mm"]])
+        parts.append("<h2>Contact</h2>" + _table(rows, ["contact", "r part (mm)", "angle part (deg)",
+                                                         "r roller (mm)", "angle roller (deg)", "gap (mm)"]))
+        parts.append(_table([["nominal screw pitch diameter (mm)", sr["nominal_pitch_diameter_mm"]],
+                             ["theoretical screw pitch diameter (mm)", sr["theoretical_pitch_diameter_mm"]],
+                             ["interference at nominal, axial (mm)", sr["interference_at_nominal_mm"]]]))
+        parts.append(f"<p class='note'>{html.escape(c['conventions'])}</p>")
+    if loads is not None:
+        L = loads.report()
+        parts.append("<h2>Load distribution</h2>")
+        parts.append(_table([["design load (N)", L["design_load_N"]], ["installation", L["installation"]],
+                             ["max LDC", L["max_ldc"]], ["max LDC, constant pitch", L["constant_pitch"]["max_ldc"]],
+                             ["axial stiffness (N/um)", L["axial_stiffness_N_per_um"]]]))
+        shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
+        parts.append("<div class='plots'>" + "".join(_svg(t) for t in shown) + "</div>")
+    for part, sheet in (machining or {}).items():
+        parts.append(f"<h2>Machining sheet: {html.escape(part)}</h2>")
+        parts.append(_table([[k, v] for k, v in sheet.header.items()]))
+        parts.append(_table([[r[k] if r[k] is not None else "" for k, _, _ in COLUMNS] for r in sheet.rows],
+                            [f"{t} ({u})" if u else t for _, t, u in COLUMNS]))
+    parts.append("<h2>Design</h2>" + _table(_flatten(design_to_dict(design)), ["field", "value"]))
+    if mesh_checks is not None:
+        parts.append("<h2>Mesh checks</h2>" + _table(
+            [[m["part"], m["triangles"], m["watertight"], m["manifold"], m["chord_tolerance_mm"],
+              m["max_deviation_mm"]] for m in mesh_checks],
+            ["part", "triangles", "watertight", "manifold", "chord tol. (mm)", "max deviation (mm)"]))
+    payload = json.dumps(scene_payload(design)).replace("</", "<\\/")
+    page = _fill(_template("report.html"), {
+        "title": html.escape(design.name), "css": _template("report.css"), "body": "".join(parts),
+        "scene": payload, "viewer": _template("viewer.js")})
+    # the template file ends with a newline; the page has always ended at </html>
+    path.write_text(page.rstrip("\n"), encoding="utf-8")

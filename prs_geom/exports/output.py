@@ -1,0 +1,251 @@
+"""Output folders that never lose a user's files.
+
+Rule (README "Output folders")
+------------------------------
+prs-geom marks every folder it writes with a manifest, :data:`MANIFEST_NAME`, listing
+the files it wrote and the version that wrote them. An output path may be
+
+* a path that does not exist yet (its parent folders are created),
+* an empty folder, or
+* a folder carrying that manifest and nothing else than the files its manifest lists.
+
+Anything else is refused before any work starts (:class:`OutputRefused`, exit code 2),
+naming the path and what is in the way; nothing is touched. A file given where a folder
+is expected is refused the same way, and so is the current working directory (replacing
+the folder a shell stands in would leave the shell in a deleted folder).
+
+Writing is atomic: everything goes into a temporary sibling folder
+``.<name>.tmp-<pid>-<random>`` that carries the manifest (marked in progress) from its
+first moment. Only when every stage has succeeded is an existing output renamed aside to
+``.<name>.old-<pid>-<random>``, the new folder renamed into place, and the old one
+removed last. On an exception (including Ctrl-C and SIGTERM, which the CLI turns into
+exceptions) the temporary folder is removed and the target is as it was.
+
+A process killed outright (SIGKILL, power loss) cannot clean up; its temporary folders
+carry its pid, and the next run that writes beside them removes those whose process is
+gone (only folders that carry the prs-geom manifest). An ``.old-`` folder whose target
+is missing (killed between the two renames) is put back in place instead of removed.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import secrets
+import shutil
+import signal
+import time
+from pathlib import Path
+from types import TracebackType
+from typing import Any, Iterable
+
+from prs_geom.model.errors import OutputRefused
+from prs_geom.model.io import check_output_file, is_office_lock, write_file_atomic
+
+__all__ = ["MANIFEST_NAME", "AtomicOutputDir", "OutputRefused", "check_output_dir", "check_output_file",
+           "clean_stale", "read_manifest", "write_file_atomic"]
+
+#: Name of the manifest that marks a folder as written by prs-geom.
+MANIFEST_NAME = ".prs-geom-manifest.json"
+MANIFEST_FORMAT = 1
+#: Temporary and set-aside folders: .<target>.tmp-<pid>-<hex> and .<target>.old-<pid>-<hex>.
+_TEMP_RE = re.compile(r"^\.(?P<target>.+)\.(?P<kind>tmp|old)-(?P<pid>\d+)-[0-9a-f]{8}$")
+
+
+def read_manifest(folder: Path) -> dict[str, Any] | None:
+    """The manifest of ``folder``, or None when it has none (or an unreadable one)."""
+    try:
+        data = json.loads((folder / MANIFEST_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("written_by") != "prs-geom" or \
+            not isinstance(data.get("files"), list):
+        return None
+    return data
+
+
+def _entries(folder: Path) -> list[str]:
+    """Every file and folder below ``folder``, as POSIX paths relative to it."""
+    out = []
+    for root, dirs, files in os.walk(folder):
+        rel = Path(root).relative_to(folder)
+        for name in dirs + files:
+            out.append((rel / name).as_posix())
+    return sorted(out)
+
+
+def _describe(names: Iterable[str], limit: int = 5) -> str:
+    names = list(names)
+    shown = []
+    for n in names[:limit]:
+        base = n.rsplit("/", 1)[-1]
+        shown.append(f"{n} (lock file of a document open in an office program: close it first)"
+                     if is_office_lock(base) else n)
+    more = f" and {len(names) - limit} more" if len(names) > limit else ""
+    return ", ".join(shown) + more
+
+
+def check_output_dir(target: str | os.PathLike[str]) -> Path:
+    """Check that prs-geom may (re)write ``target``; return it resolved.
+
+    Raises :class:`OutputRefused` naming the path and what is in the way.
+    """
+    given = str(target)
+    path = Path(target).resolve()
+    cwd = Path.cwd().resolve()
+    if path == cwd or path in cwd.parents:
+        raise OutputRefused(f"output folder {given!r} is the current folder or contains it: prs-geom "
+                            f"replaces its output folder as a whole, so give a new or prs-geom-written "
+                            f"sub-folder (for example exports/<name>)")
+    if path.parent == path:
+        raise OutputRefused(f"output folder {given!r} is a file-system root")
+    if not path.exists():
+        if path.is_symlink():
+            raise OutputRefused(f"output path {given!r} is a dangling symbolic link")
+        return path
+    if not path.is_dir():
+        raise OutputRefused(f"output path {given!r} is an existing file, not a folder: prs-geom does "
+                            f"not replace files it did not write; give a folder")
+    entries = _entries(path)
+    if not entries:
+        return path
+    manifest = read_manifest(path)
+    if manifest is None:
+        raise OutputRefused(f"output folder {given!r} is not empty and was not written by prs-geom "
+                            f"(no {MANIFEST_NAME}); in the way: {_describe(entries)}. Nothing was "
+                            f"touched: give a new or empty folder")
+    listed = set(manifest["files"]) | {MANIFEST_NAME}
+    # folders that hold listed files are the manifest's too
+    for f in list(listed):
+        parts = f.split("/")
+        listed.update("/".join(parts[:k]) for k in range(1, len(parts)))
+    foreign = [e for e in entries if e not in listed]
+    if foreign:
+        raise OutputRefused(f"output folder {given!r} was written by prs-geom but now also holds "
+                            f"files it did not write: {_describe(foreign)}. Nothing was touched: move "
+                            f"them out or give another folder")
+    return path
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def clean_stale(parent: Path) -> list[str]:
+    """Remove the temporary folders of dead prs-geom processes in ``parent``.
+
+    Only folders named like ours *and* carrying our manifest are touched. An ``.old-``
+    folder whose target is missing is renamed back into place. Returns what was done.
+    """
+    done = []
+    try:
+        names = os.listdir(parent)
+    except OSError:
+        return done
+    for name in names:
+        m = _TEMP_RE.match(name)
+        if not m or _pid_alive(int(m["pid"])):
+            continue
+        folder = parent / name
+        if not folder.is_dir() or folder.is_symlink() or read_manifest(folder) is None:
+            continue
+        target = parent / m["target"]
+        if m["kind"] == "old" and not target.exists():
+            os.replace(folder, target)
+            done.append(f"restored {target} from {name}")
+        else:
+            shutil.rmtree(folder, ignore_errors=True)
+            done.append(f"removed {name}")
+    return done
+
+
+def _manifest(files: list[str], complete: bool, extra: dict[str, Any]) -> str:
+    from prs_geom._version import __version__
+
+    data = {"written_by": "prs-geom", "format_version": MANIFEST_FORMAT, "prs_geom_version": __version__,
+            "complete": complete, "pid": os.getpid(),
+            "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **extra,
+            "files": sorted(files)}
+    return json.dumps(data, indent=2) + "\n"
+
+
+class AtomicOutputDir:
+    """Context manager yielding a temporary folder that replaces ``target`` on success.
+
+    The target is checked first (:func:`check_output_dir`); stale temporary folders of dead
+    processes beside it are cleaned. On success the manifest lists every file in the
+    folder. On an exception inside the block the temporary folder is removed and
+    ``target`` is untouched.
+    """
+
+    def __init__(self, target: str | os.PathLike[str], manifest_extra: dict[str, Any] | None = None) -> None:
+        self.given = str(target)
+        self.target = check_output_dir(target)
+        self.extra = dict(manifest_extra or {})
+        self.tmp: Path | None = None
+        self.cleaned: list[str] = []
+
+    def __enter__(self) -> Path:
+        parent = self.target.parent
+        parent.mkdir(parents=True, exist_ok=True)
+        self.cleaned = clean_stale(parent)
+        tmp = parent / f".{self.target.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"
+        umask = os.umask(0)
+        os.umask(umask)
+        # Ctrl-C or SIGTERM between the mkdir and the return would leave the folder behind
+        # (__exit__ does not run for an exception raised in __enter__): hold the signals
+        # until the folder carries its manifest, then let a pending one in where it is
+        # cleaned up.
+        blocked = {signal.SIGINT, signal.SIGTERM}
+        previous = signal.pthread_sigmask(signal.SIG_BLOCK, blocked)
+        try:
+            tmp.mkdir(mode=0o777 & ~umask)
+            self.tmp = tmp
+            (tmp / MANIFEST_NAME).write_text(_manifest([], False, self.extra), encoding="utf-8")
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+            raise
+        try:
+            signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        return tmp
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> bool:
+        assert self.tmp is not None
+        if exc_type is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            return False
+        try:
+            files = [e for e in _entries(self.tmp) if (self.tmp / e).is_file() and e != MANIFEST_NAME]
+            (self.tmp / MANIFEST_NAME).write_text(_manifest(files, True, self.extra), encoding="utf-8")
+            # the target may have changed while we worked: check again right before replacing
+            check_output_dir(self.target)
+        except BaseException:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            raise
+        old = None
+        if self.target.exists():
+            old = self.target.parent / f".{self.target.name}.old-{os.getpid()}-{secrets.token_hex(4)}"
+            os.replace(self.target, old)
+        try:
+            os.replace(self.tmp, self.target)
+        except BaseException:
+            if old is not None:
+                os.replace(old, self.target)
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            raise
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return False

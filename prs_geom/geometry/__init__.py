@@ -1,0 +1,8 @@
+"""Analytic geometry in pure numpy: the surfaces everything else is checked against.
+
+Owns the part frames and roller phasing (:mod:`~prs_geom.geometry.frames`), the flank
+shapes (:mod:`~prs_geom.geometry.flanks`: straight and arc flanks as objects), the thread
+profiles of screw, roller and nut (:mod:`~prs_geom.geometry.profiles`), the graded-pitch
+warp of the helical surfaces (:mod:`~prs_geom.geometry.helix`) and exact axial and normal
+sections as lines and arcs (:mod:`~prs_geom.geometry.sections`). No I/O, no mesh library.
+"""

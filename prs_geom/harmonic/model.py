@@ -1,0 +1,312 @@
+"""Stepless harmonic friction drive with a conical circular spline (DOMAIN.md section 6).
+
+Pure math, no I/O (exports in :mod:`prs_geom.harmonic_exports`).
+
+Model (reconstructed in DOMAIN.md section 6; its assumptions, stated here):
+
+* Axial-section geometry, all lengths mm, angles rad inside. The flexspline is a cup of
+  neutral radius r0 and length L; its bottom A = (0, r0) on the neutral layer is the
+  origin of the axial coordinate x. The circular spline's bore is a cone: radius b1 at its
+  small end, b2 at its big end, length H, half-angle alpha with tan(alpha) = (b2 - b1) / H.
+  The small end sits at axial distance a from the flexspline bottom (the control input).
+* The wave generator pushes the flexspline's open end outward; its generatrix is taken as
+  a rigid line tilting by beta about A (no bending of the cup wall, no ovalisation across the
+  major axis: the ratio model looks only at the major-axis section).
+* The contact surface of the flexspline end is a circular arc of radius r_s whose centre lies
+  x_s = L - r_s along the generatrix from A and c_s inside it (toward the axis).
+* Contact: the arc is tangent to the cone wall. The cone line is r = b1 + (x - a) tan(alpha),
+  and with a0 = (b1 - r0) / tan(alpha) the tangency condition is
+      x_s sin(alpha - beta) + c_s cos(alpha - beta) = r_s + (a - a0) sin(alpha),
+  solved for beta in closed form (a sine of a shifted angle).
+* Contact arc angle phi = alpha - beta. Undeformed contact radius (the same material point
+  of the untilted flexspline) r_c = r0 - c_s + r_s cos(phi); cone radius at the contact
+  R_c = r0 + x_s sin(beta) - c_s cos(beta) + r_s cos(alpha); radius difference
+  Delta = R_c - r_c; ratio i = r0 / Delta (friction drive: the flexspline rolls on the
+  bore, output turns by Delta / r0 per input turn).
+* Delta falls as the small end moves away (a grows); the ratio grows without bound at the
+  position a_inf where Delta = 0. Manufacturing errors of the two radii enter Delta
+  directly, so a high maximum ratio needs tight tolerances (:func:`tolerance_for_ratio`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import optimize
+
+# the shared validators: both product lines word their errors alike
+from prs_geom.model.validation import check_name, positive, real
+from prs_geom.model.errors import DesignError
+
+@dataclass(frozen=True)
+class Flexspline:
+    neutral_radius_mm: float = 50.0
+    length_mm: float = 100.0
+    arc_radius_mm: float = 15.0
+    arc_centre_offset_mm: float = 11.18
+    wall_thickness_mm: float = 1.0
+
+    def __post_init__(self) -> None:
+        for f in ("neutral_radius_mm", "length_mm", "arc_radius_mm", "arc_centre_offset_mm", "wall_thickness_mm"):
+            object.__setattr__(self, f, positive(f, getattr(self, f)))
+        if self.arc_radius_mm >= self.length_mm:
+            raise DesignError("arc_radius_mm", self.arc_radius_mm, f"must be less than length_mm ({self.length_mm})")
+        if self.wall_thickness_mm >= 0.5 * self.neutral_radius_mm:
+            raise DesignError("wall_thickness_mm", self.wall_thickness_mm, "must be less than half the neutral radius")
+
+
+@dataclass(frozen=True)
+class CircularSpline:
+    bore_small_radius_mm: float = 53.0
+    bore_large_radius_mm: float = 57.0
+    bore_length_mm: float = 50.0
+    outer_radius_mm: float = 65.0
+
+    def __post_init__(self) -> None:
+        for f in ("bore_small_radius_mm", "bore_large_radius_mm", "bore_length_mm", "outer_radius_mm"):
+            object.__setattr__(self, f, positive(f, getattr(self, f)))
+        if self.bore_large_radius_mm <= self.bore_small_radius_mm:
+            raise DesignError("bore_large_radius_mm", self.bore_large_radius_mm,
+                              f"must exceed bore_small_radius_mm ({self.bore_small_radius_mm}): the bore is a cone")
+        if self.outer_radius_mm <= self.bore_large_radius_mm:
+            raise DesignError("outer_radius_mm", self.outer_radius_mm,
+                              f"must exceed bore_large_radius_mm ({self.bore_large_radius_mm})")
+
+
+@dataclass(frozen=True)
+class Positions:
+    """Axial position a (mm) of the cone's small end from the flexspline bottom."""
+
+    min_mm: float = 42.0
+    max_mm: float = 74.0
+    drawing_mm: tuple[float, ...] = (42.0, 60.0, 73.5)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "min_mm", real("min_mm", self.min_mm))
+        object.__setattr__(self, "max_mm", real("max_mm", self.max_mm))
+        if self.max_mm <= self.min_mm:
+            raise DesignError("max_mm", self.max_mm, f"must exceed min_mm ({self.min_mm})")
+        if isinstance(self.drawing_mm, (str, bytes)) or not hasattr(self.drawing_mm, "__iter__"):
+            raise DesignError("drawing_mm", self.drawing_mm, "must be a list of positions (mm)")
+        vals = tuple(real(f"drawing_mm[{k}]", v) for k, v in enumerate(self.drawing_mm))
+        for k, v in enumerate(vals):
+            if not self.min_mm <= v <= self.max_mm:
+                raise DesignError(f"drawing_mm[{k}]", v, f"must lie in [min_mm, max_mm] = [{self.min_mm}, {self.max_mm}]")
+        object.__setattr__(self, "drawing_mm", vals)
+
+
+@dataclass(frozen=True)
+class HarmonicMesh:
+    chord_tolerance_mm: float = 0.01
+
+    def __post_init__(self) -> None:
+        t = positive("chord_tolerance_mm", self.chord_tolerance_mm)
+        if not 1e-4 <= t <= 0.1:
+            raise DesignError("chord_tolerance_mm", t, "must be from 0.0001 mm to 0.1 mm")
+        object.__setattr__(self, "chord_tolerance_mm", t)
+
+
+#: Comments written above each key of a harmonic design file (unit and meaning).
+HARMONIC_FIELD_COMMENTS: dict[str, str] = {
+    "kind": '"prs" (default) or "harmonic"',
+    "flexspline.neutral_radius_mm": "flexspline neutral-layer radius r0 (mm)",
+    "flexspline.length_mm": "flexspline length L from the bottom (mm)",
+    "flexspline.arc_radius_mm": "contact arc radius r_s (mm)",
+    "flexspline.arc_centre_offset_mm": "arc centre offset c_s inside the neutral layer (mm)",
+    "flexspline.wall_thickness_mm": "cup wall thickness for the mesh (mm)",
+    "circular_spline.bore_small_radius_mm": "cone bore radius b1 at the small end (mm)",
+    "circular_spline.bore_large_radius_mm": "cone bore radius b2 at the big end (mm)",
+    "circular_spline.bore_length_mm": "cone bore length H (mm)",
+    "circular_spline.outer_radius_mm": "outer radius of the circular spline ring (mm)",
+    "positions.min_mm": "smallest position a of the cone small end from the flexspline bottom (mm)",
+    "positions.max_mm": "largest position a (mm), below the infinite-ratio position",
+    "positions.drawing_mm": "positions a drawn in the DXF (mm)",
+}
+
+
+@dataclass(frozen=True)
+class HarmonicDesign:
+    """A conical-circular-spline harmonic friction drive; defaults = the published worked
+    example (docs/theory/harmonic.md)."""
+
+    #: ``kind`` written in its design files (read back through prs_geom.pipeline.DESIGN_KINDS)
+    FILE_KIND: ClassVar[str] = "harmonic"
+    FIELD_COMMENTS: ClassVar[dict[str, str]] = HARMONIC_FIELD_COMMENTS
+
+    name: str = "harmonic-example"
+    flexspline: Flexspline = field(default_factory=Flexspline)
+    circular_spline: CircularSpline = field(default_factory=CircularSpline)
+    positions: Positions = field(default_factory=Positions)
+    mesh: HarmonicMesh = field(default_factory=HarmonicMesh)
+
+    def __post_init__(self) -> None:
+        check_name(self.name)
+        f, c = self.flexspline, self.circular_spline
+        if c.bore_small_radius_mm <= f.neutral_radius_mm:
+            raise DesignError("circular_spline.bore_small_radius_mm", c.bore_small_radius_mm,
+                              f"must exceed the flexspline neutral radius {f.neutral_radius_mm}")
+        # the tangency equation must be solvable over the whole range, with Delta > 0
+        amp = math.hypot(self.x_s, f.arc_centre_offset_mm)
+        for fld, a in (("positions.min_mm", self.positions.min_mm), ("positions.max_mm", self.positions.max_mm)):
+            rhs = f.arc_radius_mm + (a - self.a0) * math.sin(self.alpha)
+            if abs(rhs) >= amp:
+                raise DesignError(fld, a, "the contact arc cannot reach the cone wall at this position")
+        a_inf = infinite_ratio_position(self)
+        if a_inf is not None and self.positions.max_mm >= a_inf:
+            raise DesignError("positions.max_mm", self.positions.max_mm,
+                              f"must be below the infinite-ratio position {a_inf:.6f} mm (radius difference reaches 0)")
+        if float(np.min(radius_difference(self, np.linspace(self.positions.min_mm, self.positions.max_mm, 201)))) <= 0:
+            raise DesignError("positions.min_mm", self.positions.min_mm, "the radius difference must stay positive")
+
+    @property
+    def alpha(self) -> float:
+        """Cone half-angle (rad): tan(alpha) = (b2 - b1) / H."""
+        c = self.circular_spline
+        return math.atan((c.bore_large_radius_mm - c.bore_small_radius_mm) / c.bore_length_mm)
+
+    @property
+    def a0(self) -> float:
+        """a0 = (b1 - r0) / tan(alpha) (mm)."""
+        return (self.circular_spline.bore_small_radius_mm - self.flexspline.neutral_radius_mm) / math.tan(self.alpha)
+
+    @property
+    def x_s(self) -> float:
+        """Axial station of the arc centre along the generatrix, L - r_s (mm)."""
+        return self.flexspline.length_mm - self.flexspline.arc_radius_mm
+
+
+# --------------------------------------------------------------------------- model
+def tilt_angle(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    """beta(a) (rad) from the tangency condition, vectorised over a (mm)."""
+    a = np.asarray(a, dtype=np.float64)
+    f = d.flexspline
+    amp = math.hypot(d.x_s, f.arc_centre_offset_mm)
+    delta = math.atan2(f.arc_centre_offset_mm, d.x_s)
+    rhs = f.arc_radius_mm + (a - d.a0) * math.sin(d.alpha)
+    # x_s sin(u) + c_s cos(u) = amp sin(u + delta) = rhs, u = alpha - beta (small branch)
+    u = np.arcsin(rhs / amp) - delta
+    return d.alpha - u
+
+
+def contact_state(d: HarmonicDesign, a: ArrayLike) -> dict[str, NDArray[np.float64]]:
+    """beta, phi (rad), contact radius r_c, cone radius R_c, Delta (mm), ratio, vectorised."""
+    f = d.flexspline
+    beta = tilt_angle(d, a)
+    phi = d.alpha - beta
+    r0, cs, rs = f.neutral_radius_mm, f.arc_centre_offset_mm, f.arc_radius_mm
+    r_c = r0 - cs + rs * np.cos(phi)
+    R_c = r0 + d.x_s * np.sin(beta) - cs * np.cos(beta) + rs * math.cos(d.alpha)
+    delta = R_c - r_c
+    with np.errstate(divide="ignore"):
+        ratio = r0 / delta
+    return {"a_mm": np.asarray(a, dtype=np.float64), "beta_rad": beta, "phi_rad": phi,
+            "contact_radius_mm": r_c, "cone_radius_mm": R_c, "radius_difference_mm": delta, "ratio": ratio}
+
+
+def radius_difference(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    return contact_state(d, a)["radius_difference_mm"]
+
+
+def ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    return contact_state(d, a)["ratio"]
+
+
+def contact_point(d: HarmonicDesign, a: float) -> tuple[float, float]:
+    """(x, r) of the contact in the axial section, x from the flexspline bottom (mm)."""
+    f = d.flexspline
+    beta = float(tilt_angle(d, a))
+    cx = d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta)
+    cr = f.neutral_radius_mm + d.x_s * math.sin(beta) - f.arc_centre_offset_mm * math.cos(beta)
+    return cx - f.arc_radius_mm * math.sin(d.alpha), cr + f.arc_radius_mm * math.cos(d.alpha)
+
+
+def infinite_ratio_position(d: HarmonicDesign) -> float | None:
+    """a (mm) where Delta = 0 (the ratio becomes infinite), or None if not reached."""
+    f = d.flexspline
+    amp = math.hypot(d.x_s, f.arc_centre_offset_mm)
+    a_hi = d.a0 + (amp - f.arc_radius_mm) / math.sin(d.alpha) - 1e-9
+    a_lo = d.a0
+    g = lambda x: float(radius_difference(d, x))  # noqa: E731
+    if g(a_lo) <= 0 or g(a_hi) > 0:
+        return None
+    return optimize.brentq(g, a_lo, a_hi, xtol=1e-13)
+
+
+def speed_range(d: HarmonicDesign) -> dict[str, float]:
+    i_min = float(ratio(d, d.positions.min_mm))
+    i_max = float(ratio(d, d.positions.max_mm))
+    return {"ratio_min": i_min, "ratio_max": i_max, "speed_range": i_max / i_min}
+
+
+#: ISO 286-1 tolerance-grade multipliers of the tolerance unit i (grades 5 to 12).
+IT_MULTIPLIERS = {5: 7, 6: 10, 7: 16, 8: 25, 9: 40, 10: 64, 11: 100, 12: 160}
+#: ISO 286-1 nominal size steps (mm) up to 500 mm.
+IT_STEPS = (3, 6, 10, 18, 30, 50, 80, 120, 180, 250, 315, 400, 500)
+
+
+def it_tolerance_um(diameter_mm: float, grade: int) -> float:
+    """ISO 286-1 standard tolerance (um) by the formula: IT1 = 0.8 + 0.020 D; IT5..IT12 =
+    k i with i = 0.45 D^(1/3) + 0.001 D; IT2..IT4 geometric between IT1 and IT5; D the
+    geometric mean of the size step. Unrounded formula values (the printed table rounds)."""
+    lo = 1.0
+    for hi in IT_STEPS:
+        if diameter_mm <= hi:
+            break
+        lo = hi
+    else:
+        raise ValueError("diameter above 500 mm")
+    D = math.sqrt(lo * hi) if lo > 1 else math.sqrt(1 * 3)
+    unit = 0.45 * D ** (1 / 3) + 0.001 * D
+    if grade >= 5:
+        return IT_MULTIPLIERS[grade] * unit
+    it1, it5 = 0.8 + 0.020 * D, 7 * unit
+    return it1 * (it5 / it1) ** ((grade - 1) / 4)
+
+
+def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float = 0.1) -> dict[str, Any]:
+    """Radius tolerance (and ISO IT grade of the bore diameter) that keeps the ratio within
+    ``ratio_error`` (relative) at the position where the ratio is ``max_ratio``.
+
+    Delta = r0 / i; an error e on each of the two radii changes Delta by up to 2 e, so the
+    ratio changes by 2 e / Delta relative: e = ratio_error Delta / 2. A centred diameter
+    tolerance band T gives radius errors of +-T/4, so T = 4 e.
+    """
+    if not max_ratio > 0:
+        raise DesignError("max_ratio", max_ratio, "must be > 0")
+    delta = d.flexspline.neutral_radius_mm / max_ratio
+    e = ratio_error * delta / 2.0
+    T_um = 4.0 * e * 1e3
+    dia = 2.0 * d.circular_spline.bore_large_radius_mm
+    grade = None
+    for g in range(12, 0, -1):
+        if it_tolerance_um(dia, g) <= T_um:
+            grade = g
+            break
+    return {"max_ratio": max_ratio, "ratio_error": ratio_error, "radius_difference_mm": delta,
+            "radius_tolerance_um": e * 1e3, "diameter_band_um": T_um, "bore_diameter_mm": dia,
+            "it_grade": grade, "ratio_change_per_um": 2e-3 / delta}
+
+
+def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dict[str, Any]:
+    if a_values is None:
+        a_values = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
+    st = contact_state(d, a_values)
+    rng = speed_range(d)
+    return {
+        "alpha_deg": math.degrees(d.alpha),
+        "a0_mm": d.a0,
+        "infinite_ratio_position_mm": infinite_ratio_position(d),
+        **rng,
+        "table": [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
+                   "phi_deg": float(np.degrees(st["phi_rad"][k])),
+                   "contact_radius_mm": float(st["contact_radius_mm"][k]),
+                   "cone_radius_mm": float(st["cone_radius_mm"][k]),
+                   "radius_difference_mm": float(st["radius_difference_mm"][k]),
+                   "ratio": float(st["ratio"][k])} for k in range(len(st["a_mm"]))],
+        "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
+        "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
+                       "see prs_geom/harmonic.py",
+    }

@@ -1,0 +1,7 @@
+"""Triangle meshes of the parts and their placed assembly (trimesh, manifold3d).
+
+Owns the thread mesher that builds every vertex on the analytic surface and measures its
+deviation (:mod:`~prs_geom.mesh.thread`), the assembly of one mesh per part with placed
+roller copies (:mod:`~prs_geom.mesh.assembly`) and the memory guard that estimates a mesh
+job before it starts (:mod:`~prs_geom.mesh.budget`).
+"""

@@ -1,0 +1,174 @@
+"""Resource guard: refuse a mesh job the machine cannot hold, before it starts.
+
+The triangle count of a thread mesh follows from its tessellation
+(:func:`prs_geom.mesh.choose_tessellation`): ``strands x columns per turn x turns x 2``
+triangles on the thread surface, plus the end faces. A build meshes the parts three
+times: at the design's chord tolerance for the exports, at ``min(tolerance, 2 um)`` for
+the interference check (which also holds an FCL BVH and a manifold3d solid of every
+distinct mesh), and at 0.1 mm for the HTML view. The peak memory is estimated from these
+counts with per-triangle costs measured on this code (``benchmarks/bench_mesh.py`` prints
+the measured peak beside the estimate); the estimate is meant to be an upper bound within
+a factor of about two.
+
+The budget defaults to :data:`DEFAULT_BUDGET_FRACTION` of the memory the operating system
+reports as available; ``--memory-budget`` on the command line sets it explicitly.
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass
+
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.errors import DesignError, PRSGeomError, format_value
+
+#: Share of the available memory a build may plan to use by default.
+DEFAULT_BUDGET_FRACTION = 0.6
+#: Bytes per triangle at the peak of each kind of mesh work (measured, rounded up):
+#: the interference check (float64 mesh, FCL BVH, manifold3d solid, trimesh caches) and
+#: the export meshes (float64 part meshes, the float32 assembly and the writers' buffers).
+BYTES_PER_CHECK_TRIANGLE = 1200
+BYTES_PER_EXPORT_TRIANGLE = 400
+BYTES_PER_PLACED_TRIANGLE = 120
+#: Interpreter, libraries and the analysis stages (bytes).
+BASE_BYTES = 250 * 2 ** 20
+CHECK_TOLERANCE_MM = 0.002
+
+
+class ResourceLimitError(PRSGeomError):
+    """The estimated memory of a job exceeds the budget (exit code 2)."""
+
+
+def available_memory_bytes() -> int:
+    """Memory available to new work (bytes): MemAvailable of /proc/meminfo, else the
+    physical memory."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 8 * 2 ** 30
+
+
+def default_budget_bytes() -> int:
+    return int(DEFAULT_BUDGET_FRACTION * available_memory_bytes())
+
+
+_SIZE_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([kKmMgGtT]?)[iI]?[bB]?\s*$")
+
+
+def parse_size(text: str, flag: str = "--memory-budget") -> int:
+    """Bytes of a size such as ``"8G"``, ``"512M"``, ``"2.5GB"`` or ``"1e9"`` (binary units)."""
+    m = _SIZE_RE.match(str(text))
+    if not m:
+        raise DesignError(flag, text, "must be a size such as 512M, 8G or 2.5GB")
+    value = float(m[1]) * 1024 ** " KMGT".index((m[2] or " ").upper())
+    if not math.isfinite(value) or value <= 0:
+        raise DesignError(flag, text, "must be a positive size")
+    return int(value)
+
+
+def format_bytes(n: float) -> str:
+    for unit, scale in (("GB", 2 ** 30), ("MB", 2 ** 20), ("kB", 2 ** 10)):
+        if n >= scale:
+            v = n / scale
+            return f"{v:.1f} {unit}" if v < 1e5 else f"{v:.3g} {unit}"
+    return f"{n:.0f} B"
+
+
+def _millions(n: float) -> str:
+    v = n / 1e6
+    return f"{v:.2f} M" if v < 1e5 else f"{v:.3g} M"
+
+
+def _half_step(sagitta_ratio: float) -> float:
+    """Half the polygon step angle (rad) whose sagitta is ``sagitta_ratio`` x the radius:
+    acos(1 - x), by its series where x is below float resolution."""
+    return math.acos(1.0 - sagitta_ratio) if sagitta_ratio > 1e-8 else math.sqrt(2.0 * sagitta_ratio)
+
+
+def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
+    """Estimated triangles of the screw, roller and nut meshes at chord tolerance ``tol`` (mm),
+    as floats (a length of 1e300 mm gives an estimate, not an overflow)."""
+    from prs_geom.geometry.frames import thread_length
+    from prs_geom.mesh.thread import choose_tessellation
+    from prs_geom.geometry.profiles import ThreadProfiles
+
+    prof = ThreadProfiles.from_design(design)
+    lengths = {"screw": design.screw.length_mm, "roller": thread_length(design), "nut": thread_length(design)}
+    out = {}
+    for name in ("screw", "roller", "nut"):
+        p = getattr(prof, name)
+        tess = choose_tessellation(p, tol)
+        strands = p.starts * (2 * len(tess.flank_radii) + 1)
+        turns = lengths[name] / p.lead
+        surface = 2.0 * strands * tess.columns_per_turn * turns
+        ends = 4.0 * tess.columns_per_turn + 2.0 * strands   # two end fans/annuli
+        if p.internal:  # body cylinder (two triangles a facet) and its share of the end annuli
+            body = 0.5 * design.nut.outer_diameter_mm
+            ends += 4.0 * max(12.0, math.pi / _half_step(tol / body))
+        out[name] = surface + ends
+    return out
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Triangles and peak memory of a job (bytes)."""
+
+    export_triangles: float
+    placed_triangles: float
+    check_triangles: float
+    peak_bytes: float
+    parts: dict[str, float]
+
+    def describe(self) -> str:
+        return (f"{_millions(self.export_triangles)} triangles in the part meshes, "
+                f"{_millions(self.check_triangles)} for the interference check, estimated peak "
+                f"memory {format_bytes(self.peak_bytes)}")
+
+
+def estimate(design: PRSDesign, export: bool = True, check: bool = True) -> Estimate:
+    """Estimated triangles and peak memory of meshing ``design`` (exports and/or check)."""
+    tol = design.mesh.chord_tolerance_mm
+    parts = part_triangles(design, tol)
+    export_tri = sum(parts.values())
+    placed = parts["screw"] + parts["nut"] + design.roller.count * parts["roller"]
+    check_tol = min(tol, CHECK_TOLERANCE_MM)
+    check_tri = sum(part_triangles(design, check_tol).values()) if check else 0
+    peaks = [0.0]
+    if export:
+        peaks.append(export_tri * BYTES_PER_EXPORT_TRIANGLE + placed * BYTES_PER_PLACED_TRIANGLE)
+    if check:
+        peaks.append(check_tri * BYTES_PER_CHECK_TRIANGLE)
+    return Estimate(export_tri if export else 0.0, placed if export else 0.0, check_tri,
+                    BASE_BYTES + max(peaks), parts)
+
+
+def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = True,
+          check: bool = True) -> Estimate:
+    """Raise :class:`ResourceLimitError` when meshing ``design`` would exceed the budget.
+
+    The message names the estimate, the budget and the design fields that drive it.
+    """
+    est = estimate(design, export, check)
+    budget = default_budget_bytes() if budget_bytes is None else budget_bytes
+    if est.peak_bytes > budget:
+        biggest = max(est.parts, key=est.parts.get)
+        length_field = ("screw.length_mm", design.screw.length_mm) if biggest == "screw" else \
+            ("thread.engaged_teeth", design.thread.engaged_teeth)
+        source = "set by --memory-budget" if budget_bytes is not None else \
+            f"{DEFAULT_BUDGET_FRACTION:.0%} of the available memory"
+        raise ResourceLimitError(
+            f"this design is too large to mesh here: {est.describe()}, over the budget "
+            f"{format_bytes(budget)} ({source}). The {biggest} mesh is the largest; it is driven by "
+            f"{length_field[0]} = {format_value(length_field[1])}, mesh.chord_tolerance_mm = "
+            f"{design.mesh.chord_tolerance_mm:g} (the check meshes at min(tolerance, "
+            f"{CHECK_TOLERANCE_MM:g} mm)) and the diameters. Shorten the part, coarsen the tolerance, "
+            f"or raise the budget with --memory-budget SIZE (e.g. --memory-budget 16G)")
+    return est

@@ -1,0 +1,7 @@
+"""The design model: what a designer writes down.
+
+Owns the frozen, validated design dataclasses (:mod:`~prs_geom.model.design`), the
+validators they share with the harmonic line (:mod:`~prs_geom.model.validation`), the error
+types (:mod:`~prs_geom.model.errors`) and reading and writing design files in TOML and JSON
+(:mod:`~prs_geom.model.io`). The bottom layer: it imports nothing else of prs_geom.
+"""

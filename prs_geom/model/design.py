@@ -1,0 +1,502 @@
+"""The design model of a planetary roller screw (PRS).
+
+Frozen dataclasses, validated at construction. Field names carry their unit
+(``_mm``, ``_deg``, ``_n``, ``_mpa``); inside the toolkit angles are radians, but a design
+stores the degrees the designer typed so that a saved design reads back to the same object.
+
+Conventions (see README "Conventions" and ../shared/DOMAIN.md section 1):
+
+* Units: mm, N, MPa; angles in degrees in files, radians in computations.
+* Frame: the screw frame, z along the screw axis, origin at the loaded end of the nut
+  thread (tooth 1 side), x through the centre of roller 0.
+* Teeth are numbered j = 1..n from the loaded end; a pitch list holds the n - 1 axial
+  distances between tooth j and tooth j + 1, in mm.
+* For the nut (an internal thread) ``major_diameter_mm`` is the groove root (largest
+  diameter) and ``minor_diameter_mm`` the crest (bore).
+
+Which relations are errors and which are warnings:
+
+* Errors: anything that makes the geometry impossible (non-positive sizes, crest not
+  above root, a tooth or groove of zero width, roller arc radius smaller than the roller
+  crest radius, crests reaching into the mating roots, rollers overlapping each other,
+  nut body thinner than its thread, pitch lists of the wrong length or far from the
+  nominal pitch, materials outside physical bounds).
+* Warnings (:class:`~prs_geom.errors.DesignWarning`): the standard-sizing relations
+  r_n = r_s + 2 r_r, r_n = n_n r_r, n_s = n_n, r_s = (n_s - 2) r_r, which a designer may
+  break on purpose.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+from prs_geom.model.errors import DesignError, DesignWarning
+from prs_geom.model.validation import (check_name, choice, integer, optional_positive, optional_size,
+                                       pitch_list, positive, real, size)
+
+#: Installation types of DOMAIN.md section 4.
+INSTALLATIONS = ("tension-compression", "compression-compression")
+HANDS = ("right", "left")
+#: Default crest/root truncation as fractions of the sharp-V half depth p / (4 tan beta).
+DEFAULT_ADDENDUM_FACTOR = 0.6
+DEFAULT_DEDENDUM_FACTOR = 0.8
+#: A pitch-list entry may differ from the nominal pitch by at most this fraction: graded
+#: pitch corrections are micrometres, anything larger is a typing error, and beyond a few
+#: per cent the warped tooth would no longer be the profile that was designed.
+MAX_PITCH_DEVIATION = 0.02
+#: Relative tolerance under which a standard-sizing relation counts as held.
+SIZING_RTOL = 1e-9
+
+def _um(x: float) -> float:
+    """Round a defaulted diameter to 0.1 um, as a drawing would state it."""
+    return round(x, 4)
+
+
+def _set(obj: Any, name: str, value: Any) -> None:
+    object.__setattr__(obj, name, value)
+
+
+# --------------------------------------------------------------------------- parts
+@dataclass(frozen=True)
+class Thread:
+    """Thread data shared by screw, rollers and nut.
+
+    Parameters
+    ----------
+    pitch_mm : float
+        Axial pitch p (mm), the same for all three threads; lead L_i = n_i p.
+    flank_half_angle_deg : float
+        Flank half-angle beta (deg) in the normal section, measured from the radial line.
+    hand : {"right", "left"}
+        Hand of all three threads (they share it, DOMAIN.md section 1).
+    engaged_teeth : int
+        Number n of roller teeth engaged with screw and nut; roller and nut thread lengths
+        are n p.
+    """
+
+    pitch_mm: float = 2.0
+    flank_half_angle_deg: float = 45.0
+    hand: str = "right"
+    engaged_teeth: int = 20
+
+    def __post_init__(self) -> None:
+        _set(self, "pitch_mm", size("pitch_mm", self.pitch_mm))
+        beta = real("flank_half_angle_deg", self.flank_half_angle_deg)
+        if not 10.0 <= beta <= 80.0:
+            raise DesignError("flank_half_angle_deg", self.flank_half_angle_deg,
+                              "must be between 10 and 80 degrees")
+        _set(self, "flank_half_angle_deg", beta)
+        choice("hand", self.hand, HANDS)
+        integer("engaged_teeth", self.engaged_teeth, 2, 500)
+
+    @property
+    def beta(self) -> float:
+        """Flank half-angle (rad)."""
+        return math.radians(self.flank_half_angle_deg)
+
+    @property
+    def hand_sign(self) -> int:
+        """+1 for a right-hand thread, -1 for a left-hand thread."""
+        return 1 if self.hand == "right" else -1
+
+
+@dataclass(frozen=True)
+class Screw:
+    """The screw: external, multi-start, constant pitch.
+
+    ``major_diameter_mm``/``minor_diameter_mm`` default to a truncation of
+    0.6/0.8 of the sharp-V half depth p/(4 tan beta); ``length_mm`` defaults to the
+    engaged length n p plus four pitches.
+    """
+
+    pitch_diameter_mm: float = 24.0
+    starts: int = 5
+    major_diameter_mm: float | None = None
+    minor_diameter_mm: float | None = None
+    length_mm: float | None = None
+
+    def __post_init__(self) -> None:
+        _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
+        integer("starts", self.starts, 1, 20)
+        for name in ("major_diameter_mm", "minor_diameter_mm"):
+            _set(self, name, optional_size(name, getattr(self, name)))
+        _set(self, "length_mm", optional_positive("length_mm", self.length_mm))
+
+
+@dataclass(frozen=True)
+class Roller:
+    """The rollers: external, single start, convex arc flank, optional graded pitch.
+
+    ``arc_radius_mm`` is the flank arc radius r_T (arc centred on the roller axis);
+    default r_r / sin(beta), tangent to a beta flank at the pitch radius.
+    ``pitch_list_mm`` holds n - 1 tooth-to-tooth axial distances; absent = constant pitch.
+    """
+
+    pitch_diameter_mm: float = 8.0
+    count: int = 10
+    arc_radius_mm: float | None = None
+    major_diameter_mm: float | None = None
+    minor_diameter_mm: float | None = None
+    pitch_list_mm: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
+        integer("count", self.count, 1, 60)
+        for name in ("arc_radius_mm", "major_diameter_mm", "minor_diameter_mm"):
+            _set(self, name, optional_size(name, getattr(self, name)))
+        _set(self, "pitch_list_mm", pitch_list("pitch_list_mm", self.pitch_list_mm))
+
+
+@dataclass(frozen=True)
+class Nut:
+    """The nut: internal, multi-start thread in a cylindrical body.
+
+    For this internal thread ``major_diameter_mm`` is the groove root and
+    ``minor_diameter_mm`` the crest (bore). ``outer_diameter_mm`` is the body D0.
+    """
+
+    pitch_diameter_mm: float = 40.0
+    starts: int = 5
+    outer_diameter_mm: float = 56.0
+    major_diameter_mm: float | None = None
+    minor_diameter_mm: float | None = None
+    pitch_list_mm: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
+        integer("starts", self.starts, 1, 20)
+        _set(self, "outer_diameter_mm", size("outer_diameter_mm", self.outer_diameter_mm))
+        for name in ("major_diameter_mm", "minor_diameter_mm"):
+            _set(self, name, optional_size(name, getattr(self, name)))
+        _set(self, "pitch_list_mm", pitch_list("pitch_list_mm", self.pitch_list_mm))
+
+
+@dataclass(frozen=True)
+class Material:
+    """Linear elastic material: Young's modulus E (MPa) and Poisson's ratio nu."""
+
+    youngs_modulus_mpa: float = 212_000.0
+    poisson_ratio: float = 0.3
+
+    def __post_init__(self) -> None:
+        _set(self, "youngs_modulus_mpa", positive("youngs_modulus_mpa", self.youngs_modulus_mpa))
+        nu = real("poisson_ratio", self.poisson_ratio)
+        if not 0.0 <= nu < 0.5:
+            raise DesignError("poisson_ratio", self.poisson_ratio, "must be in [0, 0.5)")
+        _set(self, "poisson_ratio", nu)
+
+
+@dataclass(frozen=True)
+class Materials:
+    """One material per part."""
+
+    screw: Material = field(default_factory=Material)
+    roller: Material = field(default_factory=Material)
+    nut: Material = field(default_factory=Material)
+
+
+@dataclass(frozen=True)
+class Loading:
+    """Design load and installation (DOMAIN.md section 4).
+
+    ``axial_load_n`` is the external axial load F0 (N) carried by all rollers together.
+    ``installation``: "tension-compression" (screw pulled, nut pushed, loads enter from the
+    same end) or "compression-compression".
+    """
+
+    axial_load_n: float = 20_000.0
+    installation: str = "tension-compression"
+
+    def __post_init__(self) -> None:
+        _set(self, "axial_load_n", positive("axial_load_n", self.axial_load_n))
+        choice("installation", self.installation, INSTALLATIONS)
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """Settings of the contact solver (DOMAIN.md section 3).
+
+    ``clearance_mm``: axial clearance the corrected screw diameter leaves at the
+    screw-roller contact (0 = line contact without interference).
+    ``precision_mm``: tolerance on that clearance when correcting the diameter.
+    """
+
+    clearance_mm: float = 0.0
+    precision_mm: float = 1e-10
+
+    def __post_init__(self) -> None:
+        c = real("clearance_mm", self.clearance_mm)
+        if not 0.0 <= c <= 0.1:
+            raise DesignError("clearance_mm", self.clearance_mm, "must be in [0, 0.1] mm")
+        _set(self, "clearance_mm", c)
+        prec = positive("precision_mm", self.precision_mm)
+        if not 1e-13 <= prec <= 1e-4:
+            raise DesignError("precision_mm", self.precision_mm, "must be in [1e-13, 1e-4] mm")
+        _set(self, "precision_mm", prec)
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """Tessellation settings.
+
+    ``chord_tolerance_mm``: the largest distance allowed between the mesh and the analytic
+    surface (mm); from 0.1 um to 0.1 mm.
+    """
+
+    chord_tolerance_mm: float = 0.01
+
+    def __post_init__(self) -> None:
+        tol = positive("chord_tolerance_mm", self.chord_tolerance_mm)
+        if not 1e-4 <= tol <= 0.1:
+            raise DesignError("chord_tolerance_mm", self.chord_tolerance_mm,
+                              "must be from 0.0001 mm (0.1 um) to 0.1 mm")
+        _set(self, "chord_tolerance_mm", tol)
+
+
+# --------------------------------------------------------------------------- assembly
+@dataclass(frozen=True)
+class PRSDesign:
+    """A complete planetary roller screw design.
+
+    Construction resolves every defaulted dimension (truncation diameters, roller arc
+    radius, screw length) to a number, then checks the cross-part rules. A resolved design
+    saved and loaded again compares equal to itself.
+    """
+
+    name: str = "default"
+    thread: Thread = field(default_factory=Thread)
+    screw: Screw = field(default_factory=Screw)
+    roller: Roller = field(default_factory=Roller)
+    nut: Nut = field(default_factory=Nut)
+    materials: Materials = field(default_factory=Materials)
+    loading: Loading = field(default_factory=Loading)
+    contact: ContactSettings = field(default_factory=ContactSettings)
+    mesh: MeshSettings = field(default_factory=MeshSettings)
+
+    def __post_init__(self) -> None:
+        check_name(self.name)
+        self._resolve_defaults()
+        self._check()
+
+    # -- errors ---------------------------------------------------------------
+    def _error(self, fld: str, value: Any, rule: str) -> DesignError:
+        """A :class:`DesignError` on ``fld``; when the user did not write that field, the
+        message says which default it took and from which fields."""
+        return DesignError(fld, value, rule, self.__dict__.get("_defaulted", {}).get(fld, ""))
+
+    # -- defaults -------------------------------------------------------------
+    def _resolve_defaults(self) -> None:
+        p, beta = self.thread.pitch_mm, self.thread.beta
+        half_depth = p / (4.0 * math.tan(beta))
+        add, ded = DEFAULT_ADDENDUM_FACTOR * half_depth, DEFAULT_DEDENDUM_FACTOR * half_depth
+        n = self.thread.engaged_teeth
+        h_from = "H = thread.pitch_mm / (4 tan thread.flank_half_angle_deg)"
+        notes = {
+            "screw.major_diameter_mm": f"screw.pitch_diameter_mm + 1.2 H, {h_from}",
+            "screw.minor_diameter_mm": f"screw.pitch_diameter_mm - 1.6 H, {h_from}",
+            "screw.length_mm": "(thread.engaged_teeth + 4) x thread.pitch_mm",
+            "roller.arc_radius_mm": "roller.pitch_diameter_mm / (2 sin thread.flank_half_angle_deg)",
+            "roller.major_diameter_mm": f"roller.pitch_diameter_mm + 1.2 H, {h_from}",
+            "roller.minor_diameter_mm": f"roller.pitch_diameter_mm - 1.6 H, {h_from}",
+            "nut.major_diameter_mm": f"nut.pitch_diameter_mm + 1.6 H, {h_from}",
+            "nut.minor_diameter_mm": f"nut.pitch_diameter_mm - 1.2 H, {h_from}",
+        }
+        defaulted = {}
+        for path, how in notes.items():
+            part, key = path.split(".")
+            if getattr(getattr(self, part), key) is None:
+                defaulted[path] = f"not in the design file: the default {how}"
+        # not a dataclass field: derived bookkeeping, ignored by equality and I/O
+        _set(self, "_defaulted", defaulted)
+
+        s = self.screw
+        _set(self, "screw", replace(
+            s,
+            major_diameter_mm=s.major_diameter_mm or _um(s.pitch_diameter_mm + 2 * add),
+            minor_diameter_mm=s.minor_diameter_mm or _um(s.pitch_diameter_mm - 2 * ded),
+            length_mm=s.length_mm or (n + 4) * p,
+        ))
+        r = self.roller
+        _set(self, "roller", replace(
+            r,
+            arc_radius_mm=r.arc_radius_mm or 0.5 * r.pitch_diameter_mm / math.sin(beta),
+            major_diameter_mm=r.major_diameter_mm or _um(r.pitch_diameter_mm + 2 * add),
+            minor_diameter_mm=r.minor_diameter_mm or _um(r.pitch_diameter_mm - 2 * ded),
+        ))
+        u = self.nut
+        _set(self, "nut", replace(
+            u,
+            major_diameter_mm=u.major_diameter_mm or _um(u.pitch_diameter_mm + 2 * ded),
+            minor_diameter_mm=u.minor_diameter_mm or _um(u.pitch_diameter_mm - 2 * add),
+        ))
+
+    # -- rules ----------------------------------------------------------------
+    def normal_half_widths(self) -> dict[str, tuple[float, float]]:
+        """Normal-section half-widths (mm) of each part's tooth at its crest and of its
+        groove at its root, from the design numbers (docs/theory/geometry.md).
+
+        The tooth half-width at radius r is w(r) = p cos(lambda)/4 + delta(r) with
+        delta = -tan(beta)(r - r_s) (screw), +tan(beta)(r - r_n) (nut) and
+        sqrt(r_T^2 - r^2) - sqrt(r_T^2 - r_r^2) (roller arc), lambda the lead angle at the
+        pitch radius; the groove half-width is p cos(lambda)/2 - w. The same profile is
+        built as objects by :mod:`prs_geom.geometry.profiles` (a test checks they agree);
+        the model states it here so that validation needs nothing above the model.
+        """
+        p, tb = self.thread.pitch_mm, math.tan(self.thread.beta)
+        out = {}
+        for part, spec, starts in (("screw", self.screw, self.screw.starts),
+                                   ("roller", self.roller, 1), ("nut", self.nut, self.nut.starts)):
+            r0 = 0.5 * spec.pitch_diameter_mm
+            c = math.cos(math.atan(starts * p / (2.0 * math.pi * r0)))
+            major, minor = 0.5 * spec.major_diameter_mm, 0.5 * spec.minor_diameter_mm
+            crest, root = (minor, major) if part == "nut" else (major, minor)
+            if part == "roller":
+                rt = spec.arc_radius_mm
+
+                def delta(r: float) -> float:
+                    return math.sqrt(rt * rt - r * r) - math.sqrt(rt * rt - r0 * r0)
+            else:
+                sign = 1.0 if part == "nut" else -1.0
+
+                def delta(r: float) -> float:
+                    return sign * tb * (r - r0)
+            w_crest = 0.25 * p * c + delta(crest)
+            w_root = 0.25 * p * c + delta(root)
+            out[part] = (w_crest, 0.5 * p * c - w_root)
+        return out
+
+    def _check(self) -> None:
+        p = self.thread.pitch_mm
+        n = self.thread.engaged_teeth
+        s, r, u = self.screw, self.roller, self.nut
+        for part, spec in (("screw", s), ("roller", r), ("nut", u)):
+            if not spec.minor_diameter_mm < spec.pitch_diameter_mm < spec.major_diameter_mm:
+                raise self._error(f"{part}.pitch_diameter_mm", spec.pitch_diameter_mm,
+                                  f"must lie strictly between {part}.minor_diameter_mm "
+                                  f"({spec.minor_diameter_mm}) and {part}.major_diameter_mm "
+                                  f"({spec.major_diameter_mm})")
+        if r.arc_radius_mm <= 0.5 * r.major_diameter_mm:
+            raise self._error("roller.arc_radius_mm", r.arc_radius_mm,
+                              f"must exceed the roller crest radius "
+                              f"{0.5 * r.major_diameter_mm} (the flank arc is centred on the "
+                              f"roller axis)")
+        # Tooth and groove widths must stay positive over the whole flank height.
+        for part, (crest_w, root_w) in self.normal_half_widths().items():
+            if crest_w <= 0.0:
+                fld = f"{part}.minor_diameter_mm" if part == "nut" else f"{part}.major_diameter_mm"
+                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
+                                  f"the tooth comes to a point below the crest (crest "
+                                  f"half-width {crest_w:.4g} mm): reduce the crest height")
+            if root_w <= 0.0:
+                fld = f"{part}.major_diameter_mm" if part == "nut" else f"{part}.minor_diameter_mm"
+                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
+                                  f"the groove closes above the root (root half-width "
+                                  f"{root_w:.4g} mm): make the root shallower")
+        a = 0.5 * (s.pitch_diameter_mm + r.pitch_diameter_mm)
+        if 0.5 * s.major_diameter_mm + 0.5 * r.minor_diameter_mm >= a:
+            raise self._error("screw.major_diameter_mm", s.major_diameter_mm,
+                              f"screw crest radius + roller root radius must be less than the "
+                              f"centre distance {a} mm (crest would hit the roller root)")
+        if 0.5 * r.major_diameter_mm + 0.5 * s.minor_diameter_mm >= a:
+            raise self._error("roller.major_diameter_mm", r.major_diameter_mm,
+                              f"roller crest radius + screw root radius must be less than the "
+                              f"centre distance {a} mm (crest would hit the screw root)")
+        if a + 0.5 * r.major_diameter_mm >= 0.5 * u.major_diameter_mm:
+            raise self._error("nut.major_diameter_mm", u.major_diameter_mm,
+                              f"nut root radius must exceed centre distance + roller crest "
+                              f"radius = {a + 0.5 * r.major_diameter_mm} mm")
+        if a + 0.5 * r.minor_diameter_mm >= 0.5 * u.minor_diameter_mm:
+            raise self._error("nut.minor_diameter_mm", u.minor_diameter_mm,
+                              f"nut crest radius must exceed centre distance + roller root "
+                              f"radius = {a + 0.5 * r.minor_diameter_mm} mm")
+        if u.outer_diameter_mm <= u.major_diameter_mm:
+            raise self._error("nut.outer_diameter_mm", u.outer_diameter_mm,
+                              f"must exceed nut.major_diameter_mm ({u.major_diameter_mm})")
+        gap = 2.0 * a * math.sin(math.pi / r.count) if r.count > 1 else math.inf
+        if gap <= r.major_diameter_mm:
+            raise self._error("roller.count", r.count,
+                              f"{r.count} rollers on a {a} mm centre radius overlap: roller "
+                              f"centre spacing {gap:.4g} mm must exceed the roller crest "
+                              f"diameter {r.major_diameter_mm} mm")
+        if s.length_mm < n * p:
+            raise self._error("screw.length_mm", s.length_mm,
+                              f"must be at least the engaged length n p = {n * p} mm")
+        for part, spec in (("roller", r), ("nut", u)):
+            lst = spec.pitch_list_mm
+            if lst is None:
+                continue
+            if len(lst) != n - 1:
+                raise self._error(f"{part}.pitch_list_mm", list(lst),
+                                  f"must have engaged_teeth - 1 = {n - 1} entries, has {len(lst)}")
+            for k, pj in enumerate(lst):
+                if abs(pj - p) > MAX_PITCH_DEVIATION * p:
+                    raise self._error(f"{part}.pitch_list_mm[{k}]", pj,
+                                      f"must be within {MAX_PITCH_DEVIATION:.0%} of the pitch "
+                                      f"{p} mm (graded-pitch corrections are micrometres)")
+
+    # -- warnings ------------------------------------------------------------
+    def sizing_warnings(self) -> list[str]:
+        """Standard-sizing relations (DOMAIN.md section 1) this design breaks on purpose."""
+        rs, rr, rn = (0.5 * self.screw.pitch_diameter_mm, 0.5 * self.roller.pitch_diameter_mm,
+                      0.5 * self.nut.pitch_diameter_mm)
+        ns, nn = self.screw.starts, self.nut.starts
+        out = []
+
+        def off(x: float, y: float) -> bool:
+            return abs(x - y) > SIZING_RTOL * max(abs(x), abs(y), 1.0)
+
+        if off(rn, rs + 2 * rr):
+            out.append(f"nut pitch radius {rn} != screw + 2 roller pitch radii {rs + 2 * rr}: "
+                       f"the nut and roller pitch circles do not touch")
+        if off(rn, nn * rr):
+            out.append(f"nut pitch radius {rn} != nut starts x roller pitch radius {nn * rr}: "
+                       f"nut and roller lead angles differ, rollers will drift axially")
+        if ns != nn:
+            out.append(f"screw starts {ns} != nut starts {nn}")
+        if off(rs, (ns - 2) * rr):
+            out.append(f"screw pitch radius {rs} != (screw starts - 2) x roller pitch radius "
+                       f"{(ns - 2) * rr}")
+        return out
+
+    def warn(self) -> list[str]:
+        """Issue a :class:`DesignWarning` for each broken sizing relation; return them."""
+        msgs = self.sizing_warnings()
+        for m in msgs:
+            warnings.warn(m, DesignWarning, stacklevel=2)
+        return msgs
+
+    # -- derived quantities ---------------------------------------------------
+    @property
+    def graded(self) -> bool:
+        """True when the roller or the nut carries a pitch list."""
+        return self.roller.pitch_list_mm is not None or self.nut.pitch_list_mm is not None
+
+    @property
+    def centre_distance_mm(self) -> float:
+        """Screw-roller centre distance a = r_s + r_r (mm), held fixed."""
+        return 0.5 * (self.screw.pitch_diameter_mm + self.roller.pitch_diameter_mm)
+
+    def pitch_list(self, part: str) -> tuple[float, ...]:
+        """The n - 1 tooth-to-tooth pitches of ``part`` (mm); constant when not given."""
+        n, p = self.thread.engaged_teeth, self.thread.pitch_mm
+        if part == "screw":
+            return (p,) * (n - 1)
+        lst = getattr(self, part).pitch_list_mm
+        return lst if lst is not None else (p,) * (n - 1)
+
+    def with_changes(self, **sections: Any) -> "PRSDesign":
+        """A new validated design with whole sections or the name replaced."""
+        return replace(self, **sections)
+
+
+def default_design() -> PRSDesign:
+    """The built-in standard PRS: 24/8/40 mm pitch diameters, 5 starts, p = 2 mm,
+    10 rollers, 20 engaged teeth, steel, 20 kN, tension-compression."""
+    return PRSDesign()
+
+
+def section_names() -> tuple[str, ...]:
+    """Top-level sections of a design file, in file order."""
+    return tuple(f.name for f in fields(PRSDesign))

@@ -1,0 +1,326 @@
+"""Reading and writing design files (TOML and JSON).
+
+A design file has the top-level key ``name`` and the tables ``[thread]``, ``[screw]``,
+``[roller]``, ``[nut]``, ``[materials.screw]``, ``[materials.roller]``,
+``[materials.nut]``, ``[loading]``, ``[contact]`` and ``[mesh]``; every table and key is
+optional and falls back to the built-in default design. Unknown keys are errors (a
+misspelt key silently ignored would build the wrong part).
+
+Floats are written with Python's shortest round-trip representation, so a written
+design reads back to an equal :class:`~prs_geom.model.design.PRSDesign`, bit for bit.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import re
+import secrets
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.errors import DesignError, EnvironmentFailure, OutputRefused, key_name, quote
+
+#: Comments written by ``prs-geom init`` above each key (unit and meaning).
+FIELD_COMMENTS: dict[str, str] = {
+    "name": "design name; also the default output folder exports/<name>",
+    "thread.pitch_mm": "axial pitch p (mm), shared by screw, rollers and nut",
+    "thread.flank_half_angle_deg": "flank half-angle beta (deg) in the normal section, from the radial line",
+    "thread.hand": '"right" or "left"; all three threads share the hand',
+    "thread.engaged_teeth": "engaged roller teeth n; roller and nut thread length = n p",
+    "screw.pitch_diameter_mm": "screw nominal pitch diameter d_s (mm)",
+    "screw.starts": "screw starts n_s; lead = n_s p",
+    "screw.major_diameter_mm": "crest (outside) diameter (mm)",
+    "screw.minor_diameter_mm": "root diameter (mm)",
+    "screw.length_mm": "threaded length of the screw (mm), >= n p",
+    "roller.pitch_diameter_mm": "roller pitch diameter d_r (mm)",
+    "roller.count": "number of rollers z, evenly spaced",
+    "roller.arc_radius_mm": "flank arc radius r_T (mm), arc centred on the roller axis",
+    "roller.major_diameter_mm": "crest diameter (mm)",
+    "roller.minor_diameter_mm": "root diameter (mm)",
+    "roller.pitch_list_mm": "n-1 tooth-to-tooth pitches (mm) from the loaded end; omit for constant pitch",
+    "nut.pitch_diameter_mm": "nut pitch diameter d_n (mm)",
+    "nut.starts": "nut starts n_n",
+    "nut.outer_diameter_mm": "nut body outer diameter D0 (mm)",
+    "nut.major_diameter_mm": "groove root diameter (mm), the largest thread diameter",
+    "nut.minor_diameter_mm": "crest (bore) diameter (mm)",
+    "nut.pitch_list_mm": "n-1 tooth-to-tooth pitches (mm) from the loaded end; omit for constant pitch",
+    "youngs_modulus_mpa": "Young's modulus E (MPa)",
+    "poisson_ratio": "Poisson's ratio nu",
+    "loading.axial_load_n": "external axial load F0 (N) shared by all rollers",
+    "loading.installation": '"tension-compression" or "compression-compression"',
+    "contact.clearance_mm": "axial clearance left at the screw-roller contact by the corrected screw diameter (mm)",
+    "contact.precision_mm": "precision of that clearance (mm)",
+    "mesh.chord_tolerance_mm": "largest mesh deviation from the analytic surface (mm)",
+    "kind": 'kind of design: "prs" (default) or another product line',
+    "format_version": "design-file format version (files without it are version 1)",
+}
+
+
+# --------------------------------------------------------------------------- dict form
+def design_to_dict(design: PRSDesign) -> dict[str, Any]:
+    """Plain nested dict of a (resolved) design; pitch lists as lists, absent ones omitted."""
+
+    def conv(obj: Any) -> Any:
+        if dataclasses.is_dataclass(obj):
+            out = {}
+            for f in dataclasses.fields(obj):
+                v = getattr(obj, f.name)
+                if v is None:
+                    continue
+                out[f.name] = conv(v)
+            return out
+        if isinstance(obj, tuple):
+            return [conv(v) for v in obj]
+        return obj
+
+    return conv(design)
+
+
+def build_section(cls: type, data: Any, path: str = "") -> Any:
+    """Validate the nested dict ``data`` into the dataclass ``cls``.
+
+    A field whose default is made by another dataclass (``field(default_factory=Thread)``)
+    is a table of the file and is built recursively; unknown keys are errors naming the
+    dotted path; errors from validation get the path of their table in front.
+    """
+    if not isinstance(data, dict):
+        raise DesignError(path, data, "must be a table of keys")
+    known = {f.name: f for f in dataclasses.fields(cls)}
+    kwargs: dict[str, Any] = {}
+    for key, value in data.items():
+        if key not in known:
+            raise DesignError(f"{path}.{key_name(key)}" if path else key_name(key), value,
+                              "unknown key; allowed: " + ", ".join(sorted(known)))
+        sub = _nested_type(known[key])
+        kwargs[key] = build_section(sub, value, f"{path}.{key}" if path else key) if sub else value
+    try:
+        return cls(**kwargs)
+    except DesignError as exc:
+        raise exc.prefixed(path) if path and not exc.field.startswith(path + ".") else exc
+
+
+def _nested_type(fld: dataclasses.Field) -> type | None:
+    """The dataclass type of a table field (its default factory), or None for a value."""
+    factory = fld.default_factory
+    return factory if isinstance(factory, type) and dataclasses.is_dataclass(factory) else None
+
+
+#: Design classes by the top-level ``kind`` of a file; a class may declare ``FILE_KIND``
+#: (the kind it writes) and ``FIELD_COMMENTS``. The model knows only the PRS; other product
+#: lines pass their own table (see :func:`prs_geom.pipeline.load_any_design`).
+PRS_KINDS: dict[str, type] = {"prs": PRSDesign}
+#: Version of the design-file format this prs_geom writes. Files without the key are the
+#: first format (version 1, identical keys); a newer version is refused with a message.
+DESIGN_FORMAT_VERSION = 1
+
+
+def check_format_version(value: Any, what: str = "design file") -> int:
+    """The ``format_version`` of a file this prs_geom can read, else a :class:`DesignError`."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise DesignError("format_version", value, "must be a whole number >= 1")
+    if value > DESIGN_FORMAT_VERSION:
+        from prs_geom._version import __version__
+        raise DesignError("format_version", value,
+                          f"this {what} was written by a newer prs-geom; prs_geom {__version__} reads "
+                          f"format versions 1 to {DESIGN_FORMAT_VERSION}: upgrade prs-geom")
+    return value
+
+
+def design_from_dict(data: dict[str, Any], kinds: dict[str, type] | None = None):
+    """Validate a nested dict into a design: a :class:`PRSDesign`, or the class ``kinds``
+    maps the file's ``kind`` to (errors name the dotted field)."""
+    kinds = PRS_KINDS if kinds is None else kinds
+    if not isinstance(data, dict):
+        raise DesignError("design", data, "must be a table of keys (name, thread, screw, ...)")
+    data = dict(data)
+    if "format_version" in data:
+        check_format_version(data.pop("format_version"))
+    kind = data.pop("kind", "prs")
+    if kind not in kinds:
+        raise DesignError("kind", kind, "must be one of " + ", ".join(f'"{k}"' for k in kinds))
+    return build_section(kinds[kind], data, "")
+
+
+# --------------------------------------------------------------------------- TOML
+def toml_string(text: str) -> str:
+    """A TOML basic string: quotes, backslashes and non-printable characters escaped."""
+    return quote(text)
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise ValueError(f"cannot write non-finite float {v!r} to TOML")
+        return repr(v)
+    if isinstance(v, str):
+        return toml_string(v)
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def dumps_toml(design, comments: bool = True, header: str | None = None) -> str:
+    """TOML text of a design that :func:`loads_toml` reads back to an equal object."""
+    data = _file_dict(design)
+    notes = {**FIELD_COMMENTS, **getattr(type(design), "FIELD_COMMENTS", {})}
+    lines: list[str] = []
+    if header:
+        lines += [f"# {h}" if h else "#" for h in header.splitlines()] + [""]
+
+    def emit(table: dict[str, Any], path: str) -> None:
+        scalars = {k: v for k, v in table.items() if not isinstance(v, dict)}
+        subs = {k: v for k, v in table.items() if isinstance(v, dict)}
+        if path and scalars:
+            lines.append(f"[{path}]")
+        for k, v in scalars.items():
+            key = f"{path}.{k}" if path else k
+            note = notes.get(key) or notes.get(k)
+            if comments and note:
+                lines.append(f"# {note}")
+            lines.append(f"{k} = {_toml_value(v)}")
+        if scalars:
+            lines.append("")
+        for k, v in subs.items():
+            emit(v, f"{path}.{k}" if path else k)
+
+    emit(data, "")
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def loads_toml(text: str, source: str = "<text>", kinds: dict[str, type] | None = None) -> PRSDesign:
+    """A design from TOML text; ``source`` names the file in error messages."""
+    try:
+        data = tomllib.loads(text.removeprefix("\ufeff"))
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError.about_file(source, f"is not valid TOML: {exc}") from None
+    return design_from_dict(data, kinds)
+
+
+# --------------------------------------------------------------------------- JSON
+def _file_dict(design) -> dict[str, Any]:
+    """The dict a design file holds: format version, kind (for other product lines), fields."""
+    kind = getattr(type(design), "FILE_KIND", None)
+    head: dict[str, Any] = {"format_version": DESIGN_FORMAT_VERSION}
+    if kind is not None:
+        head["kind"] = kind
+    return {**head, **design_to_dict(design)}
+
+
+def dumps_json(design) -> str:
+    """JSON text of a design that :func:`loads_json` reads back to an equal object."""
+    return json.dumps(_file_dict(design), indent=2) + "\n"
+
+
+def loads_json(text: str, source: str = "<text>", kinds: dict[str, type] | None = None) -> PRSDesign:
+    """A design from JSON text; ``source`` names the file in error messages."""
+    try:
+        data = json.loads(text.removeprefix("\ufeff"))
+    except json.JSONDecodeError as exc:
+        raise DesignError.about_file(source, f"is not valid JSON: {exc}") from None
+    except RecursionError:
+        raise DesignError.about_file(source, "is nested too deeply to be a design file") from None
+    return design_from_dict(data, kinds)
+
+
+def decode_text(raw: bytes, source: str) -> str:
+    """UTF-8 text of a design file, with or without a byte-order mark.
+
+    Any other encoding is a :class:`DesignError` naming the file and the byte offset of the
+    first byte that is not UTF-8 (UTF-16 and UTF-32 files are recognised by their mark).
+    """
+    for bom, name in ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"),
+                      (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16")):
+        if raw.startswith(bom):
+            raise DesignError.about_file(source, f"is not UTF-8: it starts with a {name} byte-order "
+                                                 f"mark; save it as UTF-8")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DesignError.about_file(source, f"is not UTF-8 text: byte 0x{raw[exc.start]:02x} at byte "
+                                             f"offset {exc.start}; save it as UTF-8") from None
+    if "\x00" in text:
+        raise DesignError.about_file(source, f"is not text: NUL byte at byte offset {raw.index(0)}")
+    return text.removeprefix("\ufeff")
+
+
+# --------------------------------------------------------------------------- files
+def load_design(path: str | Path, kinds: dict[str, type] | None = None) -> PRSDesign:
+    """Read a design from a ``.toml`` or ``.json`` file (UTF-8, with or without BOM).
+
+    A file that does not exist or is a folder is a :class:`DesignError` (bad input, exit 2);
+    a file that exists but cannot be read is an :class:`EnvironmentFailure` (exit 3).
+    """
+    path = Path(path)
+    source = str(path)
+    if not path.exists():
+        raise DesignError("design file", str(path), "does not exist")
+    if path.is_dir():
+        raise DesignError("design file", str(path), "is a folder, not a design file")
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
+    text = decode_text(raw, source)
+    if path.suffix.lower() == ".json":
+        return loads_json(text, source, kinds)
+    return loads_toml(text, source, kinds)
+
+
+def save_design(design: PRSDesign, path: str | Path, overwrite: bool = False) -> None:
+    """Write a design as TOML (``.toml``) or JSON (``.json``), atomically.
+
+    An existing file is refused (:class:`~prs_geom.output.OutputRefused`) unless
+    ``overwrite``.
+    """
+    path = check_output_file(path, force=overwrite)
+    text = dumps_json(design) if path.suffix.lower() == ".json" else dumps_toml(design)
+    try:
+        write_file_atomic(path, text)
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+# --------------------------------------------------------------------------- safe single files
+#: Lock files office programs keep beside an open document.
+_LOCK_PATTERNS = (re.compile(r"^~\$.+"), re.compile(r"^\.~lock\..+#$"))
+
+
+def is_office_lock(name: str) -> bool:
+    """True for the lock file of a document open in an office program."""
+    return any(p.match(name) for p in _LOCK_PATTERNS)
+
+
+def check_output_file(target: str | os.PathLike[str], force: bool = False) -> Path:
+    """Check that a single output file may be written (``init --out``, ``design-pitch --out``).
+
+    An existing file is refused unless ``force``; a folder and an office lock file are
+    always refused (:class:`~prs_geom.model.errors.OutputRefused`).
+    """
+    path = Path(target)
+    if path.is_dir():
+        raise OutputRefused(f"output file {str(target)!r} is an existing folder")
+    if path.exists() and not force:
+        raise OutputRefused(f"output file {str(target)!r} already exists: prs-geom does not "
+                            f"overwrite it without --force")
+    if path.name and is_office_lock(path.name):
+        raise OutputRefused(f"output file {str(target)!r} is an office lock file")
+    return path
+
+
+def write_file_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary sibling and a rename."""
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()

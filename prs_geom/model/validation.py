@@ -1,0 +1,89 @@
+"""Validators of design values, shared by every design model (PRS and harmonic).
+
+Each takes the field path as the user wrote it and the value, returns the value in its
+canonical type, or raises :class:`~prs_geom.model.errors.DesignError` naming the field, the
+value as written and the rule.
+"""
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from prs_geom.model.errors import DesignError, format_value
+
+#: Allowed design names (they name output folders).
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+#: Largest accepted size (mm) of a diameter, radius or pitch: a sanity bound, since a
+#: value above 10 m is a unit mistake (lengths are in mm), and the geometry code needs
+#: finite, representable sizes. Lengths along the axis are bounded by the memory guard.
+MAX_SIZE_MM = 1e4
+
+
+def real(fld: str, value: Any) -> float:
+    """A finite number (int or float, not bool)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DesignError(fld, value, "must be a number")
+    v = float(value)
+    if not math.isfinite(v):
+        raise DesignError(fld, value, "must be a finite number")
+    return v
+
+
+def positive(fld: str, value: Any) -> float:
+    """A finite number > 0."""
+    v = real(fld, value)
+    if v <= 0.0:
+        raise DesignError(fld, value, "must be > 0")
+    return v
+
+
+def integer(fld: str, value: Any, lo: int, hi: int) -> int:
+    """A whole number in [lo, hi] (an int, not a float or bool)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise DesignError(fld, value, f"must be a whole number from {lo} to {hi}")
+    if not lo <= value <= hi:
+        raise DesignError(fld, value, f"must be a whole number from {lo} to {hi}")
+    return value
+
+
+def choice(fld: str, value: Any, options: tuple[str, ...]) -> str:
+    """One of ``options``."""
+    if value not in options:
+        raise DesignError(fld, value, "must be one of " + ", ".join(format_value(o) for o in options))
+    return value
+
+
+def size(fld: str, value: Any) -> float:
+    """A positive size in mm, at most :data:`MAX_SIZE_MM`."""
+    v = positive(fld, value)
+    if v > MAX_SIZE_MM:
+        raise DesignError(fld, value, f"must be at most {MAX_SIZE_MM:g} mm (10 m; sizes are in mm)")
+    return v
+
+
+def optional_positive(fld: str, value: Any) -> float | None:
+    """None (not given: a default applies) or a positive number."""
+    return None if value is None else positive(fld, value)
+
+
+def optional_size(fld: str, value: Any) -> float | None:
+    """None (not given: a default applies) or a size (:func:`size`)."""
+    return None if value is None else size(fld, value)
+
+
+def pitch_list(fld: str, value: Any) -> tuple[float, ...] | None:
+    """None or a list of positive pitches (mm); items are named ``fld[k]`` in errors."""
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__iter__"):
+        raise DesignError(fld, value, "must be a list of pitches in mm")
+    return tuple(positive(f"{fld}[{k}]", v) for k, v in enumerate(value))
+
+
+def check_name(value: Any) -> str:
+    """A design name: it names the output folder, so only safe file-name characters."""
+    if not isinstance(value, str) or not NAME_RE.match(value):
+        raise DesignError("name", value, "must be 1-64 characters of letters, digits, '_', '.', '-', "
+                                         "starting with a letter or digit (it names the output folder)")
+    return value
