@@ -415,7 +415,7 @@ def make_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
                        description="Ratio of the conical-circular-spline harmonic friction drive "
-                                   "(DOMAIN.md section 6) as a function of the axial position a.")
+                                   "(docs/theory/harmonic.md) as a function of the axial position a.")
     p.add_argument("design", nargs="?", metavar="FILE",
                    help="harmonic design file (kind = \"harmonic\"); the worked example if omitted")
     p.add_argument("--a", type=float, nargs="+", action="extend", metavar="A",

@@ -1,4 +1,4 @@
-"""Analytic contact points of screw-roller and roller-nut (DOMAIN.md section 3).
+"""Analytic contact points of screw-roller and roller-nut (docs/theory/contact.md).
 
 Pure math, no I/O. All computations in the right-hand screw frame (z along the axis);
 results for a left-hand design are the mirror image y -> -y (angles change sign).
@@ -347,7 +347,7 @@ def tooth_contacts(design: PRSDesign, side: str, flank: str, rollers: NDArray | 
     ("screw" or "nut"), ``flank`` "upper" or "lower"; with the Newton start values.
 
     Roller tooth turn j has its mid-plane at W_r((j - 1/2) p) at the roller's local
-    theta = 0 (DOMAIN tooth numbering from the loaded end). The screw or nut tooth it meets
+    theta = 0 (teeth numbered from the loaded end). The screw or nut tooth it meets
     is the one whose mid-plane at the contact is nearest p/2 above (upper) or below (lower).
     """
     fl = part_flanks(design, screw_profile)

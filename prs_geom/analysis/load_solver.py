@@ -929,7 +929,7 @@ def solve_loads_batch(model: LoadModel, loads: float | Sequence[float] | NDArray
 
     ``loads``: axial load(s) F0, N, scalar or (B,); ``g_nr``, ``g_rs``: cumulative initial
     gaps (:func:`gap_terms`), mm, (B, n); ``linear_at``: tooth load(s) (N, scalar or (B,))
-    at which Hertz is replaced by its tangent (the linear model B f = x of DOMAIN.md
+    at which Hertz is replaced by its tangent (the linear model B f = x of docs/theory
     section 4). The batch is solved in chunks that fit ``memory_mb``; ``progress(stage,
     samples done, B)`` is called after every chunk. ``strategy="barrier"`` skips phase 1;
     ``linear_solver`` "banded" (default without a dense compliance) or "dense".
@@ -965,7 +965,7 @@ def solve_loads(model: LoadModel, load: float, g_nr: NDArray, g_rs: NDArray,
     The loads solve the complementarity problem of the module docstring (every tooth in
     contact with f_j > 0 and its compatibility equation, every other tooth with f_j = 0 and
     an open gap, equilibrium). ``linear_at`` replaces the Hertz law by its tangent at that
-    tooth load (N): the linear model B f = x of DOMAIN.md section 4.
+    tooth load (N): the linear model B f = x of docs/theory/loads.md.
     """
     g_nr = np.asarray(g_nr, dtype=np.float64)
     g_rs = np.asarray(g_rs, dtype=np.float64)

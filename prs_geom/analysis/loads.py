@@ -1,4 +1,4 @@
-"""Load distribution over the thread teeth and equal-load pitch design (DOMAIN.md section 4).
+"""Load distribution over the thread teeth and equal-load pitch design (docs/theory/loads.md).
 
 Pure math, no I/O.
 
@@ -31,7 +31,7 @@ Equal load (every coefficient 1): contact and tooth terms cancel and d_r = 0, so
     p_r,j = p_s - F0 p j / (n E_s A_s)           (compression-compression)
     p_n,j = p_r,j + F0 p (n - j) / (n E_n A_n)   (both)
 
-DOMAIN.md writes the nut relation with a minus sign and leaves the convention open; with
+docs/theory writes the nut relation with a minus sign and leaves the convention open; with
 the nut supported at the loaded end the far nut teeth move toward the support the most,
 so they must start closer to the roller teeth: the nut pitch is the larger one.
 
@@ -266,7 +266,7 @@ def design_pitches(design: PRSDesign, target_nr: Sequence[float] | None = None,
 
     Targets are load-distribution coefficients per tooth (mean 1; None = equal). The tooth
     loads are fixed by the target, so the compatibility equations give the pitch
-    differences directly: x = B f (DOMAIN.md section 4).
+    differences directly: x = B f (docs/theory/loads.md).
     """
     model = model or build_model(design)
     n, z = model.n, model.z

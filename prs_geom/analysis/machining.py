@@ -1,4 +1,4 @@
-"""Pitch-modification machining data for roller and nut (DOMAIN.md section 5).
+"""Pitch-modification machining data for roller and nut (docs/theory/manufacturing.md).
 
 Pure math, no I/O; the sheets are written by :mod:`prs_geom.sheets`.
 

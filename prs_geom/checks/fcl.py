@@ -1,4 +1,4 @@
-"""Verification of the analytic contact distances with python-fcl (DOMAIN.md section 3).
+"""Verification of the analytic contact distances with python-fcl (docs/theory/contact.md).
 
 For each side (screw-roller, roller-nut) a fine mesh patch of each flank is built once
 around the analytic nearest point of a reference contact, in the part's own frame, with

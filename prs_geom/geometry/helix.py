@@ -1,4 +1,4 @@
-"""Helical thread surfaces and the graded-pitch warp (DOMAIN.md sections 1-2).
+"""Helical thread surfaces and the graded-pitch warp (docs/theory/geometry.md).
 
 Pure math, no I/O.
 

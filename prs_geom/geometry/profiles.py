@@ -1,4 +1,4 @@
-"""Thread profiles of screw, roller and nut (DOMAIN.md section 1).
+"""Thread profiles of screw, roller and nut (docs/theory/geometry.md).
 
 Pure math, no I/O. Convention used everywhere in the toolkit ("normal-section
 convention"): the designer's profile is given in the normal section at the pitch radius;

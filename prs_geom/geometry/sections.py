@@ -9,7 +9,7 @@ ELLIPSE entities. Coordinates: X along the part axis (mm, part frame z), Y the r
   centred on the roller axis; in the axial section (normal-section convention: axial widths
   divided by cos(lambda)) it is an elliptical arc with semi-axes r_T / cos(lambda) along the
   axis and r_T radially, centred on the axis: written as a true ELLIPSE.
-* Normal section of one tooth at the pitch radius (DOMAIN.md section 1 formulas, no
+* Normal section of one tooth at the pitch radius (docs/theory/geometry.md formulas, no
   cos(lambda) scaling): straight flanks and the roller's true circular ARC.
 """
 from __future__ import annotations

@@ -1,8 +1,8 @@
-"""Stepless harmonic friction drive with a conical circular spline (DOMAIN.md section 6).
+"""Stepless harmonic friction drive with a conical circular spline (docs/theory/harmonic.md).
 
 Pure math, no I/O (exports in :mod:`prs_geom.harmonic_exports`).
 
-Model (reconstructed in DOMAIN.md section 6; its assumptions, stated here):
+Model (reconstructed in docs/theory/harmonic.md; its assumptions, stated here):
 
 * Axial-section geometry, all lengths mm, angles rad inside. The flexspline is a cup of
   neutral radius r0 and length L; its bottom A = (0, r0) on the neutral layer is the

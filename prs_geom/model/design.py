@@ -4,7 +4,7 @@ Frozen dataclasses, validated at construction. Field names carry their unit
 (``_mm``, ``_deg``, ``_n``, ``_mpa``); inside the toolkit angles are radians, but a design
 stores the degrees the designer typed so that a saved design reads back to the same object.
 
-Conventions (see README "Conventions" and ../shared/DOMAIN.md section 1):
+Conventions (see README "Conventions" and docs/theory section 1):
 
 * Units: mm, N, MPa; angles in degrees in files, radians in computations.
 * Frame: the screw frame, z along the screw axis, origin at the loaded end of the nut
@@ -36,7 +36,7 @@ from prs_geom.model.errors import DesignError, DesignWarning
 from prs_geom.model.validation import (check_name, choice, integer, optional_positive, optional_size,
                                        pitch_list, positive, real, size)
 
-#: Installation types of DOMAIN.md section 4.
+#: Installation types of docs/theory/loads.md.
 INSTALLATIONS = ("tension-compression", "compression-compression")
 HANDS = ("right", "left")
 #: Default crest/root truncation as fractions of the sharp-V half depth p / (4 tan beta).
@@ -70,7 +70,7 @@ class Thread:
     flank_half_angle_deg : float
         Flank half-angle beta (deg) in the normal section, measured from the radial line.
     hand : {"right", "left"}
-        Hand of all three threads (they share it, DOMAIN.md section 1).
+        Hand of all three threads (they share it, docs/theory/geometry.md).
     engaged_teeth : int
         Number n of roller teeth engaged with screw and nut; roller and nut thread lengths
         are n p.
@@ -199,7 +199,7 @@ class Materials:
 
 @dataclass(frozen=True)
 class Loading:
-    """Design load and installation (DOMAIN.md section 4).
+    """Design load and installation (docs/theory/loads.md).
 
     ``axial_load_n`` is the external axial load F0 (N) carried by all rollers together.
     ``installation``: "tension-compression" (screw pulled, nut pushed, loads enter from the
@@ -216,7 +216,7 @@ class Loading:
 
 @dataclass(frozen=True)
 class ContactSettings:
-    """Settings of the contact solver (DOMAIN.md section 3).
+    """Settings of the contact solver (docs/theory/contact.md).
 
     ``clearance_mm``: axial clearance the corrected screw diameter leaves at the
     screw-roller contact (0 = line contact without interference).
@@ -438,7 +438,7 @@ class PRSDesign:
 
     # -- warnings ------------------------------------------------------------
     def sizing_warnings(self) -> list[str]:
-        """Standard-sizing relations (DOMAIN.md section 1) this design breaks on purpose."""
+        """Standard-sizing relations (docs/theory/geometry.md) this design breaks on purpose."""
         rs, rr, rn = (0.5 * self.screw.pitch_diameter_mm, 0.5 * self.roller.pitch_diameter_mm,
                       0.5 * self.nut.pitch_diameter_mm)
         ns, nn = self.screw.starts, self.nut.starts

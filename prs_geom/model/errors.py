@@ -135,4 +135,4 @@ class EnvironmentFailure(PRSGeomError):
 
 
 class DesignWarning(UserWarning):
-    """A standard-sizing relation of DOMAIN.md section 1 is broken (allowed on purpose)."""
+    """A standard-sizing relation of docs/theory/geometry.md is broken (allowed on purpose)."""
