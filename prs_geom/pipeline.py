@@ -93,7 +93,7 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
 
 
 # --------------------------------------------------------------------------- context
-@dataclass
+@dataclass(frozen=True)
 class MeshStage:
     """The meshes stage: the assembly at the design's chord tolerance and its checks."""
 

@@ -153,3 +153,32 @@ def test_flank_shape_is_an_object_not_a_string_switch(needle):
     else asks the flank object."""
     hits = [str(p.relative_to(ROOT)) for p in PACKAGE.rglob("*.py") if needle in p.read_text(encoding="utf-8")]
     assert hits == []
+
+
+def test_docs_build_strict_without_warnings(tmp_path):
+    """The site (theory pages, CLI, report, API reference from the docstrings) builds with
+    warnings as errors."""
+    exe = shutil.which("mkdocs", path=str(Path(sys.executable).parent)) or shutil.which("mkdocs")
+    assert exe, "mkdocs is part of the test extra"
+    r = subprocess.run([exe, "build", "--strict", "--site-dir", str(tmp_path / "site")], capture_output=True,
+                       text=True, cwd=ROOT, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "WARNING" not in r.stderr
+    page = (tmp_path / "site" / "reference" / "analysis" / "index.html").read_text(encoding="utf-8")
+    assert "theoretical_screw_pitch_diameter_mm" in page and "ContactResult" in page
+
+
+def test_readme_and_docs_stand_alone():
+    """README links docs/, every relative link resolves inside the repository, and nothing
+    points at the notes outside it."""
+    import re
+
+    for md in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        text = md.read_text(encoding="utf-8")
+        assert "../shared" not in text and "DOMAIN.md" not in text, md
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text):
+            if "://" in target:
+                continue
+            path = (md.parent / target).resolve()
+            assert path.exists() and ROOT in path.parents, (md.name, target)
+    assert "docs/index.md" in (ROOT / "README.md").read_text(encoding="utf-8")

@@ -146,10 +146,6 @@ class LoadModel:
         f = np.asarray(f, dtype=np.float64)
         return h * np.sign(f) * np.abs(f) ** (2.0 / 3.0) + t * f
 
-    def deflection_slope(self, side: str, f: NDArray) -> NDArray:
-        h, t = (self.hertz_nr, self.tooth_nr) if side == "nr" else (self.hertz_rs, self.tooth_rs)
-        return (2.0 / 3.0) * h * np.abs(f) ** (-1.0 / 3.0) + t
-
     def body_matrices(self) -> tuple[NDArray, NDArray]:
         """Linear maps (n, 2n) from loads [f_nr, f_rs] to the cumulative body terms
 

@@ -26,7 +26,8 @@ from prs_geom._version import __version__
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.profiles import ThreadProfiles
-from prs_geom.geometry.sections import CircleArc, EllipseArc, Segment, axial_section, normal_section
+from prs_geom.geometry.primitives import CircleArc, EllipseArc, Segment
+from prs_geom.geometry.sections import axial_section, normal_section
 
 LAYERS = {"PROFILE": (7, "Continuous"), "CENTRE": (1, "CENTER"), "PITCH": (3, "DASHED"),
           "ANNOTATION": (2, "Continuous")}

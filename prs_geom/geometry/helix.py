@@ -35,7 +35,6 @@ pitch change. Consequences, stated so nobody has to rediscover them:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -154,7 +153,3 @@ def identity_warp(pitch: float) -> PitchWarp:
     """The warp of a constant-pitch thread."""
     return PitchWarp(0.0, pitch, None)
 
-
-def warp_from_list(first_knot: float, pitch: float, pitch_list: Sequence[float] | None) -> PitchWarp:
-    """Convenience constructor (None list = constant pitch)."""
-    return PitchWarp(first_knot, pitch, None if pitch_list is None else tuple(pitch_list))

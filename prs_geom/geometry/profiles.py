@@ -87,21 +87,12 @@ class ThreadProfile:
         if self.flank.pitch_radius != self.pitch_radius:
             object.__setattr__(self, "flank", self.flank.at_pitch_radius(self.pitch_radius))
 
-    @property
-    def quarter_width(self) -> float:
-        """p cos(lambda) / 4 (mm): the normal-section tooth half-width at the pitch radius."""
-        return 0.25 * self.pitch * self.cos_lead
-
     # -- lead ----------------------------------------------------------------
     @property
     def lead(self) -> float:
         """Lead L = n p (mm), unsigned."""
         return self.starts * self.pitch
 
-    @property
-    def signed_lead(self) -> float:
-        """Lead with the hand: z advances by this per +2 pi of theta (mm)."""
-        return self.hand_sign * self.lead
 
     @property
     def lead_angle(self) -> float:

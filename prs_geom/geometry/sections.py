@@ -15,12 +15,11 @@ ELLIPSE entities. Coordinates: X along the part axis (mm, part frame z), Y the r
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from prs_geom.geometry.helix import PitchWarp
-from prs_geom.geometry.primitives import CircleArc, EllipseArc, Segment
+from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile
 
 

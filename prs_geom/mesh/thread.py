@@ -499,12 +499,6 @@ def analytic_thread_volume(profile: ThreadProfile, length: float, body_radius: f
     return inner
 
 
-def thread_surface_area_bound(profile: ThreadProfile, length: float) -> float:
-    """A generous upper bound of the thread surface area (mm^2), for error budgets."""
-    stretch = 1.0 / math.cos(max(profile.beta, 1e-9)) + 1.0
-    return 2 * math.pi * profile.outer_radius * length * stretch
-
-
 def manifold_status(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> str:
     """manifold3d's verdict on a mesh ("NoError" when it accepts it as a solid), in float64."""
     import manifold3d

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from prs_geom.model.errors import DesignError, DesignWarning
@@ -496,7 +496,3 @@ def default_design() -> PRSDesign:
     10 rollers, 20 engaged teeth, steel, 20 kN, tension-compression."""
     return PRSDesign()
 
-
-def section_names() -> tuple[str, ...]:
-    """Top-level sections of a design file, in file order."""
-    return tuple(f.name for f in fields(PRSDesign))
