@@ -1,6 +1,6 @@
 """Command-line interface ``prs-geom``.
 
-Exit codes (README "Exit codes"):
+Exit codes (docs/cli.md "Exit codes"):
 
 * 0 success;
 * 1 the analysis found a problem (e.g. interference) or a solver did not converge;
@@ -375,7 +375,7 @@ def make_parser() -> argparse.ArgumentParser:
                                        "theoretical screw pitch diameter",
                        description="Analytic contact points (collinear-normal Newton-Raphson) of "
                                    "screw-roller and roller-nut, and the screw pitch diameter that "
-                                   "removes the interference. Angles: see README 'Contact'.")
+                                   "removes the interference. Angles: see docs/outputs.md 'Contact and interference'.")
     design_arg(p)
     p.add_argument("--json", action="store_true", help="print the report.json 'contact' section")
     p.set_defaults(func=cmd_contact)

@@ -31,9 +31,9 @@ Equal load (every coefficient 1): contact and tooth terms cancel and d_r = 0, so
     p_r,j = p_s - F0 p j / (n E_s A_s)           (compression-compression)
     p_n,j = p_r,j + F0 p (n - j) / (n E_n A_n)   (both)
 
-docs/theory writes the nut relation with a minus sign and leaves the convention open; with
-the nut supported at the loaded end the far nut teeth move toward the support the most,
-so they must start closer to the roller teeth: the nut pitch is the larger one.
+With the nut supported at the loaded end the far nut teeth move toward the support the
+most, so they must start closer to the roller teeth: the nut pitch is the larger one
+(docs/theory/loads.md derives the sign).
 
 Compliances
 -----------

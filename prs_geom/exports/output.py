@@ -1,6 +1,6 @@
 """Output folders that never lose a user's files.
 
-Rule (README "Output folders")
+Rule (docs/cli.md "Output folders")
 ------------------------------
 prs-geom marks every folder it writes with a manifest, :data:`MANIFEST_NAME`, listing
 the files it wrote and the version that wrote them. An output path may be

@@ -4,7 +4,7 @@ Frozen dataclasses, validated at construction. Field names carry their unit
 (``_mm``, ``_deg``, ``_n``, ``_mpa``); inside the toolkit angles are radians, but a design
 stores the degrees the designer typed so that a saved design reads back to the same object.
 
-Conventions (see README "Conventions" and docs/theory section 1):
+Conventions (see docs/theory/conventions.md):
 
 * Units: mm, N, MPa; angles in degrees in files, radians in computations.
 * Frame: the screw frame, z along the screw axis, origin at the loaded end of the nut

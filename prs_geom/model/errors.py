@@ -6,7 +6,7 @@ flag, e.g. ``--load``), the value as the user would write it (TOML spelling: ``2
 ``"left"``, ``[1, 2]``, never ``np.float64(2.0)``), and the rule it broke, so that a
 designer can fix the file without reading the code.
 
-Exit codes of the command line (README "Exit codes"): :class:`DesignError` and
+Exit codes of the command line (docs/cli.md "Exit codes"): :class:`DesignError` and
 :class:`OutputRefused` 2, :class:`EnvironmentFailure` 3,
 :class:`ConvergenceError` and other analysis findings 1.
 """
