@@ -19,7 +19,6 @@ Exit codes (docs/cli.md "Exit codes"):
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import sys
 import warnings
@@ -29,7 +28,7 @@ from typing import Sequence
 from prs_geom._version import __version__
 from prs_geom.model.design import PRSDesign, default_design
 from prs_geom.exports.output import check_output_dir
-from prs_geom.mesh.budget import ResourceLimitError, parse_size
+from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, ResourceLimitError, parse_size
 from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
 from prs_geom.progress import StderrProgress, silent
@@ -37,7 +36,6 @@ from prs_geom.progress import StderrProgress, silent
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
 #: Environment variable read as the default of ``--memory-budget``.
-MEMORY_BUDGET_ENV = "PRS_GEOM_MEMORY_BUDGET"
 
 
 class UsageError(PRSGeomError):
@@ -50,11 +48,10 @@ class Terminated(BaseException):
 
 
 def _memory_budget(args: argparse.Namespace) -> int | None:
+    """The --memory-budget flag in bytes; None lets the guard take its default
+    (:func:`prs_geom.mesh.budget.default_budget_bytes`)."""
     text = getattr(args, "memory_budget", None)
-    if text is not None:
-        return parse_size(text, "--memory-budget")
-    env = os.environ.get(MEMORY_BUDGET_ENV)
-    return parse_size(env, MEMORY_BUDGET_ENV) if env else None
+    return None if text is None else parse_size(text, "--memory-budget")
 
 
 def _load_any(path: str | None):

@@ -2,6 +2,8 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
+# every build in the tests runs under an explicit memory budget, whatever the machine has free
+os.environ.setdefault("PRS_GEOM_MEMORY_BUDGET", "6G")
 
 from hypothesis import HealthCheck, settings  # noqa: E402
 

@@ -366,3 +366,13 @@ def test_loads_command_succeeds_for_many_teeth(tmp_path, n):
             assert rep["max_ldc"] > 1.4
     code, _, err = run(["loads", str(const)])
     assert code == 0 and "loads: 1/" in err          # progress on stderr
+
+
+def test_budget_from_the_environment_applies_to_the_python_api(tmp_path, monkeypatch):
+    import prs_geom as pg
+    from prs_geom.mesh.budget import ResourceLimitError
+
+    monkeypatch.setenv("PRS_GEOM_MEMORY_BUDGET", "100M")
+    with pytest.raises(ResourceLimitError, match=r"over the budget 100.0 MB \(set by \$PRS_GEOM_MEMORY_BUDGET\)"):
+        pg.build(pg.default_design(), tmp_path / "out")
+    assert not (tmp_path / "out").exists()

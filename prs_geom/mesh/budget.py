@@ -56,7 +56,16 @@ def available_memory_bytes() -> int:
         return 8 * 2 ** 30
 
 
+#: Environment variable that sets the budget when none is passed (CLI and Python API alike).
+MEMORY_BUDGET_ENV = "PRS_GEOM_MEMORY_BUDGET"
+
+
 def default_budget_bytes() -> int:
+    """$PRS_GEOM_MEMORY_BUDGET (a size such as ``8G``), else
+    :data:`DEFAULT_BUDGET_FRACTION` of the available memory."""
+    env = os.environ.get(MEMORY_BUDGET_ENV)
+    if env:
+        return parse_size(env, MEMORY_BUDGET_ENV)
     return int(DEFAULT_BUDGET_FRACTION * available_memory_bytes())
 
 
@@ -162,8 +171,9 @@ def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = Tru
         biggest = max(est.parts, key=est.parts.get)
         length_field = ("screw.length_mm", design.screw.length_mm) if biggest == "screw" else \
             ("thread.engaged_teeth", design.thread.engaged_teeth)
-        source = "set by --memory-budget" if budget_bytes is not None else \
-            f"{DEFAULT_BUDGET_FRACTION:.0%} of the available memory"
+        source = ("set by --memory-budget" if budget_bytes is not None else
+                  f"set by ${MEMORY_BUDGET_ENV}" if os.environ.get(MEMORY_BUDGET_ENV) else
+                  f"{DEFAULT_BUDGET_FRACTION:.0%} of the available memory")
         raise ResourceLimitError(
             f"this design is too large to mesh here: {est.describe()}, over the budget "
             f"{format_bytes(budget)} ({source}). The {biggest} mesh is the largest; it is driven by "
