@@ -404,7 +404,12 @@ def loads_report(design: PRSDesign, model: LoadModel | None = None,
     ``progress("loads", done, total)`` is called after every sub-step: base solve, constant
     pitch, linear model, stiffness, each off-design load and each chunk of the sensitivity
     study."""
-    model = model or build_model(design)
+    return _loads_section(design, model or build_model(design), progress)[0]
+
+
+def _loads_section(design: PRSDesign, model: LoadModel,
+                   progress: ProgressFn | None) -> tuple[dict[str, Any], LoadResult]:
+    """:func:`loads_report` and the tooth loads at the design load it is built on."""
     fractions = (0.25, 0.5, 1.0, 1.5)
     total = 4 + len(fractions) + sensitivity_chunks(design, model)
     count = [0]
@@ -449,7 +454,7 @@ def loads_report(design: PRSDesign, model: LoadModel | None = None,
                         "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
                         "body_nut_mm_per_N": model.body_nut, "details": model.details},
         "solver_iterations": r.iterations,
-    }
+    }, r
 
 
 @dataclass(frozen=True)
@@ -498,8 +503,7 @@ def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
     """The loads stage: forward solve, report section, equal-load design and the curves
     of the designed state (see :class:`LoadsResult`)."""
     model = build_model(design, contact)
-    section = loads_report(design, model, progress=progress)
-    result = forward(design, model=model)
+    section, result = _loads_section(design, model, progress)
     equal = design_pitches(design, model=model)
     if design.graded:
         shown = {"ldc_nut_roller": section["ldc_nut_roller"], "ldc_roller_screw": section["ldc_roller_screw"]}
