@@ -9,44 +9,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cli_helpers import run
+from cli_helpers import run, to_toml
 from prs_geom import pipeline
-from prs_geom.model.io import design_to_dict, toml_string
+from prs_geom.model.io import design_to_dict
 from prs_geom.model.design import default_design
 
 
-def _toml(v):
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        return toml_string(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(_toml(x) for x in v) + "]"
-    return str(v)
-
-
 def _write(data, path):
-    lines = []
-
-    def emit(tbl, prefix):
-        scal = {k: v for k, v in tbl.items() if not isinstance(v, dict)}
-        if prefix and scal:
-            lines.append(f"[{prefix}]")
-        lines.extend(f"{k} = {_toml(v)}" for k, v in scal.items())
-        for k, v in tbl.items():
-            if isinstance(v, dict):
-                emit(v, f"{prefix}.{k}" if prefix else k)
-
-    emit(data, "")
-    Path(path).write_text("\n".join(lines) + "\n")
-
-
+    Path(path).write_text(to_toml(data))
 
 
 not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), st.just(math.inf),

@@ -19,9 +19,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cli_helpers import run
+from cli_helpers import run, to_toml
 from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
-from prs_geom.model.io import design_to_dict, dumps_toml, toml_string
+from prs_geom.model.io import design_to_dict, dumps_toml
 from prs_geom.pipeline import load_any_design as load_design
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -52,42 +52,6 @@ def _paths(d: dict, prefix: tuple = ()) -> list[tuple]:
         if isinstance(v, dict):
             out += _paths(v, prefix + (k,))
     return out
-
-
-def toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        if math.isnan(v):
-            return "nan"
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return repr(v)
-    if isinstance(v, str):
-        return toml_string(v)
-    if isinstance(v, list):
-        return "[" + ", ".join(toml_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{toml_string(str(k))} = {toml_value(x)}" for k, x in v.items()) + "}"
-    raise TypeError(type(v))
-
-
-def to_toml(data: dict) -> str:
-    lines = []
-
-    def emit(tbl: dict, prefix: str) -> None:
-        scal = {k: v for k, v in tbl.items() if not isinstance(v, dict)}
-        if prefix:
-            lines.append(f"[{prefix}]")
-        lines.extend(f"{toml_string(str(k))} = {toml_value(v)}" for k, v in scal.items())
-        for k, v in tbl.items():
-            if isinstance(v, dict):
-                emit(v, f"{prefix}.{toml_string(str(k))}" if prefix else toml_string(str(k)))
-
-    emit(data, "")
-    return "\n".join(lines) + "\n"
 
 
 numbers = st.one_of(
