@@ -262,6 +262,12 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
 
     design = _load(args.design)
     _warn(design)
+    if args.robust:
+        return _design_pitch_robust(args, design)
+    for flag in ("spectrum", "quantile", "flank_um", "roller_diameter_um", "eccentricity_um", "lead_um",
+                 "temperature_k", "distribution", "samples", "seed", "workers", "scheduler", "dask_workers"):
+        if getattr(args, flag) is not None:
+            raise UsageError(f"--{flag.replace('_', '-')} goes with --robust")
     n = design.thread.engaged_teeth
     t_nr = t_rs = None
     if args.target != "equal":
@@ -280,6 +286,168 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
         print(f"wrote {args.out}: largest coefficient error of the forward check {err:.2e}", file=sys.stderr)
     else:
         sys.stdout.write(text)
+    return EXIT_OK
+
+
+def _execution(args: argparse.Namespace, quiet: bool):
+    """Where the chunks of a study run (--workers, --scheduler, --dask-workers)."""
+    from prs_geom.studies import Execution
+
+    if args.workers is not None and args.workers < 1:
+        raise DesignError("--workers", args.workers, "must be >= 1")
+    if args.dask_workers is not None and args.dask_workers < 1:
+        raise DesignError("--dask-workers", args.dask_workers, "must be >= 1")
+    return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
+                     progress=silent if quiet else StderrProgress())
+
+
+def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
+    """The design's [tolerances] (or none) with the flags on top; flags name themselves in errors."""
+    from dataclasses import replace
+
+    from prs_geom.model.design import Tolerances
+
+    base = design.tolerances or Tolerances()
+    changes = {}
+    for flag, keys in (("flank_um", ("flank_um",)), ("roller_diameter_um", ("roller_diameter_um",)),
+                       ("eccentricity_um", ("screw_eccentricity_um", "nut_eccentricity_um")),
+                       ("lead_um", ("lead_um",)), ("temperature_k", ("temperature_k",)),
+                       ("samples", ("samples",)), ("seed", ("seed",)), ("distribution", ("distribution",))):
+        v = getattr(args, flag, None)
+        if v is not None:
+            for k in keys:
+                changes[k] = v
+    if args.flank_um is not None:      # a flag replaces any per-tooth allocation of the file
+        changes.update(screw_flank_um=None, roller_screw_flank_um=None, roller_nut_flank_um=None,
+                       nut_flank_um=None)
+    if getattr(args, "load_fraction", None):
+        changes["load_fractions"] = tuple(args.load_fraction)
+    if changes and design.tolerances is not None and "source" not in changes:
+        changes["source"] = design.tolerances.source + " (changed on the command line)"
+    elif changes:
+        changes["source"] = "given on the command line"
+    try:
+        return replace(base, **changes)
+    except DesignError as exc:
+        flag = {"screw_eccentricity_um": "eccentricity_um", "nut_eccentricity_um": "eccentricity_um",
+                "load_fractions": "load_fraction"}.get(exc.field.split("[")[0], exc.field.split("[")[0])
+        raise exc.renamed("--" + flag.replace("_", "-")) from None
+
+
+def cmd_tolerance(args: argparse.Namespace) -> int:
+    from prs_geom import studies
+    from prs_geom.model.io import load_spectrum
+
+    design = _load(args.design)
+    _warn(design)
+    tols = _cli_tolerances(args, design)
+    execution = _execution(args, quiet=args.json or args.quiet)
+    loads = None
+    if args.spectrum:
+        if args.load_fraction:
+            raise UsageError("give --spectrum or --load-fraction, not both")
+        loads = load_spectrum(args.spectrum).loads_n
+    if args.target_ldc is not None:
+        if args.confidence is None:
+            args.confidence = 0.95
+        if args.out:
+            check_output_file(args.out, args.force)        # refuse before the work
+        F0 = design.loading.axial_load_n
+        fractions = tols.load_fractions if loads is None else tuple(F / F0 for F in loads)
+        res = studies.synthesise(design, args.target_ldc, args.confidence, tols, samples=tols.samples,
+                                 seed=tols.seed, load_fractions=fractions, execution=execution)
+        out = {"samples": tols.samples, "seed": tols.seed, "synthesis": res.report()}
+        if res.feasible and args.out:
+            from dataclasses import replace
+            new = replace(design, tolerances=res.tolerances)
+            _write_out_file(args.out, dumps_toml(new, header=(
+                f"'{design.name}' with flank tolerances synthesised by prs-geom tolerance:\n"
+                f"{res.tolerances.source}")), args.force)
+            if not args.json:
+                print(f"wrote {args.out}", file=sys.stderr)
+        if args.json:
+            _print_json(out)
+        else:
+            _print_synthesis(res)
+        return EXIT_OK if res.feasible else EXIT_FOUND
+    if args.out:
+        raise UsageError("--out writes synthesised tolerances: give --target-ldc")
+    if args.confidence is not None:
+        raise UsageError("--confidence goes with --target-ldc")
+    study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads)
+    if args.json:
+        _print_json(study.section)
+        return EXIT_OK
+    s = study.section
+    print(f"design {design.name}: {s['samples']} samples (seed {s['seed']}), {tols.distribution} errors: "
+          f"flank {tols.flank_um:g} um, roller diameter {tols.roller_diameter_um:g} um, eccentricity "
+          f"{tols.screw_eccentricity_um:g}/{tols.nut_eccentricity_um:g} um (screw/nut), lead {tols.lead_um:g} um, "
+          f"temperature {tols.temperature_k:g} K")
+    print(f"{'load':>8} {'no error':>9} {'median':>8} {'p95':>8} {'p99':>8} {'max':>8} {'roller share max p95':>21}")
+    for c in s["cases"]:
+        w = c["worst_ldc"]
+        print(f"{c['load_fraction'] * 100:7.0f}% {c['deterministic']['worst_ldc']:9.4f} {w['median']:8.4f} "
+              f"{w['p95']:8.4f} {w['p99']:8.4f} {w['max']:8.4f} {c['roller_load_share_max']['p95']:21.4f}")
+    w = s["worst_ldc"]
+    print(f"worst LDC over all loads: median {w['median']:.4f}, p95 {w['p95']:.4f}, p99 {w['p99']:.4f}, "
+          f"max {w['max']:.4f}")
+    for row in s["importance"]:
+        print(f"  {row['term']:<20} {row['share'] * 100:6.1f} % of the variance")
+    return EXIT_OK
+
+
+def _print_synthesis(res) -> None:
+    r = res.report()
+    if not res.feasible:
+        print(f"target worst LDC {res.target_ldc:g} with probability {res.confidence:g} cannot be met: "
+              f"{r['checks']['reason']}")
+        return
+    print(f"target: worst LDC <= {res.target_ldc:g} with probability >= {res.confidence:g} "
+          f"({r['confidence_bound']})")
+    print(f"uniform flank tolerance: +-{res.uniform_um:.2f} um")
+    for k, v in res.allocation_um.items():
+        print(f"  allocated {k:<22} " + " ".join(f"{x:.2f}" for x in v))
+    for name in ("uniform", "allocated"):
+        c = r["checks"][name]
+        v = c["verification"]
+        print(f"{name}: {c['fraction']:.3f} of the samples meet the target (bound {c['clopper_pearson_lower']:.3f}); "
+              f"independent re-check (seed {r['checks']['verify_seed']}): {v['fraction']:.3f} "
+              f"({'meets' if v['meets_confidence'] else 'MISSES'} {res.confidence:g})")
+
+
+def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
+    from prs_geom import studies
+    from prs_geom.model.io import load_spectrum
+    from prs_geom.model.spectrum import Spectrum
+
+    if args.target != "equal":
+        raise UsageError("--robust chooses its own load sharing: leave out --target")
+    if args.out:
+        check_output_file(args.out, args.force)            # refuse before the work
+    spectrum = load_spectrum(args.spectrum) if args.spectrum else Spectrum.single(design.loading.axial_load_n)
+    tols = _cli_tolerances(args, design)
+    quantile = 0.95 if args.quantile is None else args.quantile
+    samples = args.samples if args.samples is not None else 200
+    res = studies.robust_pitch(design, spectrum, tols, quantile=quantile, samples=samples, seed=tols.seed,
+                               execution=_execution(args, quiet=args.json),
+                               name=args.name or f"{design.name}-robust")
+    c = res.comparison
+    lines = [f"Robust pitch lists of '{design.name}', written by prs-geom design-pitch --robust:",
+             f"objective: {c['objective']}",
+             f"family member a_nut_roller = {res.a_nr:.6f}, a_roller_screw = {res.a_rs:.6f} "
+             f"(1, 1 = equal sharing at {design.loading.axial_load_n:g} N)"]
+    for key, label in (("constant_pitch", "constant pitch"), ("equal_at_design_load", "equal at design load"),
+                       ("robust", "robust")):
+        lines.append(f"  {label:<21} objective {c[key]['objective']:.4f}")
+    text = dumps_toml(res.design, header="\n".join(lines))
+    if args.out:
+        _write_out_file(args.out, text, args.force)
+    elif not args.json:
+        sys.stdout.write(text)
+    if args.json:
+        _print_json(res.report())
+    else:
+        print("\n".join(lines), file=sys.stderr)
     return EXIT_OK
 
 
@@ -356,6 +524,26 @@ def make_parser() -> argparse.ArgumentParser:
         q.add_argument("design", nargs="?", metavar="DESIGN",
                        help="design file (.toml or .json); the built-in default design if omitted")
 
+    def scale_args(q: argparse.ArgumentParser) -> None:
+        g = q.add_argument_group("where the work runs (same seed, same numbers on any of them)")
+        g.add_argument("--workers", type=int, metavar="N", help="local worker processes (joblib; default 1)")
+        g.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
+                       "or 'local' (needs pip install \"prs-geom[dask]\")")
+        g.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
+
+    def error_args(q: argparse.ArgumentParser) -> None:
+        g = q.add_argument_group("error model (default: the design's [tolerances] section, else no error)")
+        g.add_argument("--flank-um", type=float, metavar="T", help="every loaded flank's axial position, +-T um")
+        g.add_argument("--roller-diameter-um", type=float, metavar="T", help="roller pitch diameter, +-T um")
+        g.add_argument("--eccentricity-um", type=float, metavar="T",
+                       help="screw and nut thread axis offset (half the run-out), T um")
+        g.add_argument("--lead-um", type=float, metavar="T", help="base-lead error over the engaged length, +-T um")
+        g.add_argument("--temperature-k", type=float, metavar="T", help="temperature difference of each part, +-T K")
+        g.add_argument("--distribution", choices=("uniform", "normal"),
+                       help="uniform within +-T (default) or normal with T = 3 sigma")
+        g.add_argument("--samples", type=int, metavar="N", help="Monte Carlo samples (default 1000)")
+        g.add_argument("--seed", type=int, metavar="S", help="random seed (default 0)")
+
     p = sub.add_parser("build", help="run every stage and write all exports and report.json",
                        description="Run every stage on a design and write all exports plus "
                                    "report.json into an output folder, atomically: a failed "
@@ -407,8 +595,39 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout); an "
                                                      "existing file is refused unless --force")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
-    p.add_argument("--name", help="name of the new design (default <name>-graded)")
+    p.add_argument("--name", help="name of the new design (default <name>-graded, <name>-robust)")
+    p.add_argument("--robust", action="store_true",
+                   help="minimise a quantile of the worst LDC over a load spectrum and the error model "
+                        "instead of equal sharing at the design load (docs/theory/tolerances.md)")
+    p.add_argument("--spectrum", metavar="FILE", help="with --robust: load spectrum ([[case]] load_n, "
+                                                      "time_share, speed_rpm); default the design load")
+    p.add_argument("--quantile", type=float, metavar="Q", help="with --robust: the quantile minimised (0.95)")
+    p.add_argument("--json", action="store_true", help="with --robust: print the comparison as JSON "
+                                                       "(the design goes to --out)")
+    error_args(p)
+    scale_args(p)
     p.set_defaults(func=cmd_design_pitch)
+
+    p = sub.add_parser("tolerance", help="load sharing under manufacturing errors; tolerance synthesis",
+                       description="Monte Carlo study of the worst load-distribution coefficient and the "
+                                   "roller load share under the error model, all rollers side by side "
+                                   "(docs/theory/tolerances.md). With --target-ldc: the largest flank "
+                                   "tolerance that meets it with probability --confidence.")
+    design_arg(p)
+    error_args(p)
+    p.add_argument("--load-fraction", type=float, nargs="+", action="extend", metavar="F",
+                   help="loads as fractions of the design load (default: the design's, else 1)")
+    p.add_argument("--spectrum", metavar="FILE", help="loads from a spectrum file ([[case]] load_n, time_share)")
+    p.add_argument("--target-ldc", type=float, metavar="L", help="synthesise: worst LDC to hold")
+    p.add_argument("--confidence", type=float, metavar="C",
+                   help="probability of holding --target-ldc (default 0.95), as a Clopper-Pearson bound")
+    p.add_argument("--out", metavar="NEW.toml", help="with --target-ldc: write the design with the "
+                                                     "synthesised [tolerances] section")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    scale_args(p)
+    p.set_defaults(func=cmd_tolerance)
 
     p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
                        description="Ratio of the conical-circular-spline harmonic friction drive "

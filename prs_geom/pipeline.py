@@ -39,6 +39,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import trimesh
 
     from prs_geom.analysis.machining import MachiningSheet
+    from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
 
 REPORT_NAME = "report.json"
@@ -112,6 +113,7 @@ class BuildContext:
     progress: ProgressFn = silent
     contact: ContactResult | None = None
     loads: LoadsResult | None = None
+    tolerance: "ToleranceStudy | None" = None
     meshes: MeshStage | None = None
     machining: dict[str, "MachiningSheet"] | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
@@ -169,6 +171,23 @@ def stage_loads(ctx: BuildContext) -> None:
     files = plot_loads(ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc, loads.designed_off_design,
                        (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label, ctx.plots_svg)
     ctx.report["files"] += files
+
+
+def stage_tolerance(ctx: BuildContext) -> None:
+    """Monte Carlo tolerance study, only for a design with a ``[tolerances]`` section
+    (docs/theory/tolerances.md): report section ``tolerance`` and the histogram/CDF plot."""
+    d = ctx.design
+    if d.tolerances is None:
+        return
+    from prs_geom.exports.plots import plot_tolerance
+    from prs_geom.studies import Execution, tolerance_study
+
+    ctx.tolerance = study = tolerance_study(d, contact=ctx.contact, model=ctx.loads.model,
+                                            execution=Execution(workers=None, progress=ctx.progress))
+    ctx.report["tolerance"] = study.section
+    per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
+    ctx.report["files"] += plot_tolerance(ctx.out, d.name, study.worst, per_case if len(per_case) > 1 else [],
+                                          float(study.deterministic.max()), ctx.plots_svg)
 
 
 def stage_meshes(ctx: BuildContext) -> None:
@@ -236,6 +255,7 @@ def stage_html(ctx: BuildContext) -> None:
 
     write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
                contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
+               tolerance=ctx.report.get("tolerance"),
                mesh_checks=ctx.meshes.checks if ctx.meshes else None)
 
 
@@ -245,6 +265,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("pitch", stage_pitch),
     ("contact", stage_contact),
     ("loads", stage_loads),
+    ("tolerance", stage_tolerance),
     ("meshes", stage_meshes),
     ("checks", stage_checks),
     ("manufacturing", stage_manufacturing),

@@ -44,9 +44,11 @@ Compliances
   component of the contact normal from the contact solver (about cos(beta) cos(lambda)), so
   the axial approach is C (F / n_z)^(2/3) / n_z.
 * Thread teeth (Yamamoto, Appendix A): bending, shear, root tilt, root shear and radial
-  terms. Yamamoto's terms are per unit circumferential width. Width convention: a roller's
-  tooth load is spread over pi d_s / z on the screw and pi d_n / z on the nut (the z rollers
-  share the circumference) and over the whole roller circumference pi d_r on the roller.
+  terms. Yamamoto's terms are per unit circumferential width; ``design.loads.tooth_width``
+  says which width one contact load acts over (:class:`~prs_geom.model.design.LoadSettings`).
+  The default, "circumference-share": a roller's tooth load is spread over pi d_s / z on the
+  screw and pi d_n / z on the nut (the z rollers share the circumference) and over the whole
+  roller circumference pi d_r on the roller.
   Tooth geometry at the load line: b = axial tooth thickness at the contact radius,
   c = radial distance from the root to the contact radius, a = b + 2 c tan(beta).
   :class:`LoadModel` may instead carry a dense symmetric positive semi-definite linear
@@ -113,7 +115,16 @@ def hertz_constant(curvatures: Sequence[float], eta: float) -> tuple[float, dict
     E, K = float(special.ellipe(m)), float(special.ellipk(m))
     C = (2.0 * K / math.pi) * (math.pi / (2.0 * k * k * E)) ** (1.0 / 3.0) \
         * (3.0 * eta / (2.0 * sum_rho)) ** (2.0 / 3.0) * sum_rho / 2.0
-    return C, {"sum_rho_per_mm": sum_rho, "F_rho": F_rho, "ellipticity_k": k}
+    # semi-axes per Q^(1/3): a = (2 k^2 E / pi)^(1/3) (3 Q eta / (2 sum_rho))^(1/3) lies in the
+    # principal plane of the smaller curvature sum, b = (2 E / (pi k))^(1/3) (...) in the other
+    base = (3.0 * eta / (2.0 * sum_rho)) ** (1.0 / 3.0)
+    a_coef = (2.0 * k * k * E / math.pi) ** (1.0 / 3.0) * base
+    b_coef = (2.0 * E / (math.pi * k)) ** (1.0 / 3.0) * base
+    # plane 2 (rho12 + rho22) is the circumferential direction of the callers' curvature order
+    circ = b_coef if r12 + r22 >= r11 + r21 else a_coef
+    return C, {"sum_rho_per_mm": sum_rho, "F_rho": F_rho, "ellipticity_k": k,
+               "semi_major_per_cbrt_N_mm": a_coef, "semi_minor_per_cbrt_N_mm": b_coef,
+               "circumferential_semi_axis_per_cbrt_N_mm": circ}
 
 
 # --------------------------------------------------------------------------- Yamamoto
@@ -169,6 +180,21 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
     hertz_rs = C_rs * nz_rs ** (-5.0 / 3.0)
     hertz_nr = C_nr * nz_nr ** (-5.0 / 3.0)
 
+    convention = design.loads.tooth_width
+    q_mean = design.loading.axial_load_n / (design.thread.engaged_teeth * z)     # axial, N
+
+    def width(part: str, side: str, pitch_diameter: float) -> float:
+        """The circumferential width (mm) the tooth terms of ``part`` at ``side`` act over."""
+        if convention == "unit":
+            return 1.0
+        if convention == "ring":
+            return math.pi * pitch_diameter
+        if convention == "contact-ellipse":
+            h, nz = (h_rs, nz_rs) if side == "rs" else (h_nr, nz_nr)
+            return 2.0 * h["circumferential_semi_axis_per_cbrt_N_mm"] * (q_mean / nz) ** (1.0 / 3.0)
+        # circumference-share: the contacts of one tooth ring share its circumference
+        return math.pi * pitch_diameter / (1 if part == "roller" else z)
+
     def tooth(part: str, r_c: float, width: float, profile) -> tuple[float, dict[str, float]]:
         b = 2.0 * float(profile.tooth_half_width(r_c))
         c = abs(r_c - profile.root_radius)
@@ -180,10 +206,12 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
         return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
                                              **{k: v / width for k, v in terms.items()}}
 
-    t_s, d_s = tooth("screw", c_rs.part_radius_mm, math.pi * 2 * theo.profile.pitch_radius / z, theo.profile)
-    t_rs_r, d_rs_r = tooth("roller", c_rs.roller_radius_mm, math.pi * design.roller.pitch_diameter_mm, prof.roller)
-    t_nr_r, d_nr_r = tooth("roller", c_nr.roller_radius_mm, math.pi * design.roller.pitch_diameter_mm, prof.roller)
-    t_n, d_n = tooth("nut", c_nr.part_radius_mm, math.pi * design.nut.pitch_diameter_mm / z, prof.nut)
+    d_r = design.roller.pitch_diameter_mm
+    t_s, d_s = tooth("screw", c_rs.part_radius_mm, width("screw", "rs", 2 * theo.profile.pitch_radius),
+                     theo.profile)
+    t_rs_r, d_rs_r = tooth("roller", c_rs.roller_radius_mm, width("roller", "rs", d_r), prof.roller)
+    t_nr_r, d_nr_r = tooth("roller", c_nr.roller_radius_mm, width("roller", "nr", d_r), prof.roller)
+    t_n, d_n = tooth("nut", c_nr.part_radius_mm, width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
     A = _section_areas(design)
     inst = design.loading.installation
     return LoadModel(
@@ -193,7 +221,7 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
         body_screw=p / (mats.screw.youngs_modulus_mpa * A["screw"]),
         body_roller=p / (mats.roller.youngs_modulus_mpa * A["roller"]),
         body_nut=p / (mats.nut.youngs_modulus_mpa * A["nut"]),
-        details={"hertz_rs": {**h_rs, "normal_axial_component": nz_rs, "C_normal": C_rs},
+        details={"tooth_width": convention, "hertz_rs": {**h_rs, "normal_axial_component": nz_rs, "C_normal": C_rs},
                  "hertz_nr": {**h_nr, "normal_axial_component": nz_nr, "C_normal": C_nr},
                  "tooth_screw": d_s, "tooth_roller_screw_side": d_rs_r,
                  "tooth_roller_nut_side": d_nr_r, "tooth_nut": d_n, "section_areas_mm2": A},

@@ -105,10 +105,37 @@ def _svg(text: str) -> str:
     return text[text.index("<svg"):]
 
 
+def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
+    """The tolerance section: error model, quantiles per load, roller share, importance, plot."""
+    tol = t["tolerances"]
+    out = [f"<h2 id='tolerance'>Tolerances and load sharing</h2>",
+           f"<p class='note'>{t['samples']} Monte Carlo samples (seed {t['seed']}), all rollers side by "
+           f"side; {html.escape(tol['distribution'])} errors; source: {html.escape(tol['source'])}.</p>",
+           _table([["flank position (um)", tol["flank_um"]], ["roller pitch diameter (um)", tol["roller_diameter_um"]],
+                   ["screw eccentricity (um)", tol["screw_eccentricity_um"]],
+                   ["nut eccentricity (um)", tol["nut_eccentricity_um"]], ["base lead (um)", tol["lead_um"]],
+                   ["temperature difference (K)", tol["temperature_k"]]], ["error term", "tolerance T"])]
+    rows = [[f"{c['load_fraction'] * 100:g} %", c["deterministic"]["worst_ldc"], c["worst_ldc"]["median"],
+             c["worst_ldc"]["p95"], c["worst_ldc"]["p99"], c["worst_ldc"]["max"],
+             c["roller_load_share_max"]["p95"]] for c in t["cases"]]
+    w = t["worst_ldc"]
+    rows.append(["all loads", t["deterministic_worst_ldc"], w["median"], w["p95"], w["p99"], w["max"],
+                 t["roller_load_share"]["max"]["p95"]])
+    out.append(_table(rows, ["load", "no error", "median", "p95", "p99", "max", "roller share max, p95"]))
+    if t["importance"]:
+        out.append("<h3>Which error drives the spread</h3>" + _table(
+            [[r["term"], f"{r['share'] * 100:.1f} %", r["std_alone"]] for r in t["importance"]],
+            ["error group", "share of the variance", "std of the worst LDC alone"]))
+    if "tolerance_ldc" in svgs:
+        out.append("<div class='plots'>" + _svg(svgs["tolerance_ldc"]) + "</div>")
+    return "".join(out)
+
+
 def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                contact: ContactResult | None = None, loads: LoadsResult | None = None,
                plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
-               mesh_checks: list[dict[str, Any]] | None = None) -> None:
+               mesh_checks: list[dict[str, Any]] | None = None,
+               tolerance: dict[str, Any] | None = None) -> None:
     """Write ``report.html`` from the stage results of a build.
 
     ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
@@ -150,6 +177,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                              ["axial stiffness (N/um)", L["axial_stiffness_N_per_um"]]]))
         shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
         parts.append("<div class='plots'>" + "".join(_svg(t) for t in shown) + "</div>")
+    if tolerance is not None:
+        parts.append(_tolerance_html(tolerance, plots_svg or {}))
     for part, sheet in (machining or {}).items():
         parts.append(f"<h2>Machining sheet: {html.escape(part)}</h2>")
         parts.append(_table([[k, v] for k, v in sheet.header.items()]))

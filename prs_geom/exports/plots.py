@@ -84,3 +84,29 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
                     f"{name}: off-design load distribution")
     files += save_figure(fig, out, "off_design", svgs)
     return files
+
+
+def plot_tolerance(out: Path, name: str, worst: np.ndarray, per_case: list[tuple[str, np.ndarray]],
+                   deterministic: float, svgs: dict[str, str] | None = None) -> list[str]:
+    """Histogram and empirical CDF of the worst load-distribution coefficient of a tolerance
+    study (``worst``: each sample's worst over both sides and all loads; ``per_case``:
+    (label, values) per load); the no-error value as a vertical line."""
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    bins = max(10, min(60, int(np.sqrt(worst.size))))
+    ax1.hist(worst, bins=bins, color="C0", alpha=0.8)
+    ax1.axvline(deterministic, color="C3", lw=1.2, label=f"no error {deterministic:.3f}")
+    ax1.set_xlabel("worst load-distribution coefficient")
+    ax1.set_ylabel("samples")
+    ax1.set_title("histogram (all loads)")
+    ax1.legend()
+    for label, v in [("all loads", worst)] + list(per_case):
+        s = np.sort(v)
+        ax2.step(s, np.arange(1, s.size + 1) / s.size, where="post", label=label)
+    ax2.axhline(0.95, color="0.6", lw=0.8, ls="--")
+    ax2.set_xlabel("worst load-distribution coefficient")
+    ax2.set_ylabel("fraction of samples <= value")
+    ax2.set_title("cumulative distribution")
+    ax2.grid(alpha=0.3)
+    ax2.legend()
+    fig.suptitle(f"{name}: worst LDC under the tolerances ({worst.size} samples)")
+    return save_figure(fig, out, "tolerance_ldc", svgs)

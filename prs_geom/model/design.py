@@ -175,10 +175,12 @@ class Nut:
 
 @dataclass(frozen=True)
 class Material:
-    """Linear elastic material: Young's modulus E (MPa) and Poisson's ratio nu."""
+    """Linear elastic material: Young's modulus E (MPa), Poisson's ratio nu and the linear
+    thermal expansion coefficient alpha (1/K; measurements refer to 20 degC, ISO 1)."""
 
     youngs_modulus_mpa: float = 212_000.0
     poisson_ratio: float = 0.3
+    thermal_expansion_per_k: float = 11.5e-6
 
     def __post_init__(self) -> None:
         _set(self, "youngs_modulus_mpa", positive("youngs_modulus_mpa", self.youngs_modulus_mpa))
@@ -186,6 +188,12 @@ class Material:
         if not 0.0 <= nu < 0.5:
             raise DesignError("poisson_ratio", self.poisson_ratio, "must be in [0, 0.5)")
         _set(self, "poisson_ratio", nu)
+        alpha = real("thermal_expansion_per_k", self.thermal_expansion_per_k)
+        # engineering metals and polymers lie between about 0.5e-6 (Invar) and 2e-4 1/K
+        if not 0.0 <= alpha <= 1e-3:
+            raise DesignError("thermal_expansion_per_k", self.thermal_expansion_per_k,
+                              "must be in [0, 0.001] 1/K (steel: 11.5e-6)")
+        _set(self, "thermal_expansion_per_k", alpha)
 
 
 @dataclass(frozen=True)
@@ -212,6 +220,145 @@ class Loading:
     def __post_init__(self) -> None:
         _set(self, "axial_load_n", positive("axial_load_n", self.axial_load_n))
         choice("installation", self.installation, INSTALLATIONS)
+
+
+#: Tooth-width conventions of the Yamamoto tooth terms (docs/theory/loads.md, "Tooth width").
+TOOTH_WIDTHS = ("circumference-share", "ring", "contact-ellipse", "unit")
+
+
+@dataclass(frozen=True)
+class LoadSettings:
+    """Settings of the load-distribution model (docs/theory/loads.md).
+
+    ``tooth_width``: the circumferential width over which the Yamamoto tooth terms (given per
+    unit width) spread one contact load:
+
+    * ``"circumference-share"`` (default): the part's pitch circumference divided by the
+      contacts on one tooth ring: pi d_s / z (screw), pi d_n / z (nut), pi d_r (roller, one
+      contact per flank);
+    * ``"ring"``: the whole pitch circumference pi d of every part;
+    * ``"contact-ellipse"``: the circumferential diameter 2 b of the Hertz contact ellipse at
+      the design load;
+    * ``"unit"``: 1 mm (the formulas as published, per unit width).
+    """
+
+    tooth_width: str = "circumference-share"
+
+    def __post_init__(self) -> None:
+        choice("tooth_width", self.tooth_width, TOOTH_WIDTHS)
+
+
+#: Distributions of a tolerance: uniform within +-T, or normal with T = 3 sigma.
+DISTRIBUTIONS = ("uniform", "normal")
+#: Largest tolerance accepted (um): beyond this the errors are not tolerances but a
+#: different design, and the linearisations of the error model no longer hold.
+MAX_TOLERANCE_UM = 100.0
+#: Per-tooth flank tolerance lists of :class:`Tolerances`: (field, part, mating contact).
+FLANK_FIELDS = ("screw_flank_um", "roller_screw_flank_um", "roller_nut_flank_um", "nut_flank_um")
+
+
+def _tolerance(fld: str, value: Any, hi: float = MAX_TOLERANCE_UM) -> float:
+    v = real(fld, value)
+    if not 0.0 <= v <= hi:
+        raise DesignError(fld, value, f"must be in [0, {hi:g}]")
+    return v
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """The manufacturing error model of a design (docs/theory/tolerances.md).
+
+    Every tolerance T is a half-width: an error lies within +-T (``distribution`` "uniform")
+    or has standard deviation T / 3 ("normal"). All in micrometres (um) or kelvin (K); 0
+    switches a term off.
+
+    * ``flank_um``: axial position of every loaded flank of every tooth of every part
+      (screw, each roller's nut-side and screw-side flank, nut), independent per flank and
+      per roller; the per-tooth lists (n values each, tooth 1 at the loaded end) override it
+      for their flank: ``screw_flank_um``, ``roller_screw_flank_um``,
+      ``roller_nut_flank_um``, ``nut_flank_um``.
+    * ``roller_diameter_um``: pitch-diameter error of each roller (on the diameter).
+    * ``screw_eccentricity_um``, ``nut_eccentricity_um``: radial offset of the screw or nut
+      thread axis from the common axis (half the radial run-out), random direction.
+    * ``lead_um``: error of the base lead of each part, as the axial error accumulated over
+      the engaged length (n - 1) p (screw, each roller, nut independently).
+    * ``temperature_k``: temperature of each part (screw, rollers together, nut) against
+      the others; each part's pitch grows by its ``materials.*.thermal_expansion_per_k``.
+    * ``samples``, ``seed``, ``load_fractions``: the Monte Carlo study ``prs-geom build``
+      runs when the design has this section (load fractions of ``loading.axial_load_n``).
+    * ``source``: where the numbers come from; ``target_ldc`` and ``confidence``: the target
+      of a tolerance synthesis that wrote them (``prs-geom tolerance --target-ldc``).
+    """
+
+    distribution: str = "uniform"
+    flank_um: float = 0.0
+    screw_flank_um: tuple[float, ...] | None = None
+    roller_screw_flank_um: tuple[float, ...] | None = None
+    roller_nut_flank_um: tuple[float, ...] | None = None
+    nut_flank_um: tuple[float, ...] | None = None
+    roller_diameter_um: float = 0.0
+    screw_eccentricity_um: float = 0.0
+    nut_eccentricity_um: float = 0.0
+    lead_um: float = 0.0
+    temperature_k: float = 0.0
+    samples: int = 1000
+    seed: int = 0
+    load_fractions: tuple[float, ...] = (1.0,)
+    source: str = "entered by the designer"
+    target_ldc: float | None = None
+    confidence: float | None = None
+
+    def __post_init__(self) -> None:
+        choice("distribution", self.distribution, DISTRIBUTIONS)
+        for name in ("flank_um", "roller_diameter_um", "screw_eccentricity_um", "nut_eccentricity_um",
+                     "lead_um"):
+            _set(self, name, _tolerance(name, getattr(self, name)))
+        _set(self, "temperature_k", _tolerance("temperature_k", self.temperature_k, 200.0))
+        for name in FLANK_FIELDS:
+            v = getattr(self, name)
+            if v is None:
+                continue
+            if isinstance(v, (str, bytes, dict)) or not hasattr(v, "__iter__"):
+                raise DesignError(name, v, "must be a list of tolerances in um, one per engaged tooth")
+            _set(self, name, tuple(_tolerance(f"{name}[{k}]", x) for k, x in enumerate(v)))
+        _set(self, "samples", integer("samples", self.samples, 1, 10_000_000))
+        _set(self, "seed", integer("seed", self.seed, 0, 2 ** 63 - 1))
+        fr = self.load_fractions
+        if isinstance(fr, (str, bytes, dict)) or not hasattr(fr, "__iter__") or len(fr) == 0:
+            raise DesignError("load_fractions", fr, "must be a non-empty list of load fractions")
+        out = []
+        for k, x in enumerate(fr):
+            v = positive(f"load_fractions[{k}]", x)
+            if v > 10.0:
+                raise DesignError(f"load_fractions[{k}]", x, "must be at most 10 (fractions of the design load)")
+            out.append(v)
+        _set(self, "load_fractions", tuple(out))
+        if not isinstance(self.source, str):
+            raise DesignError("source", self.source, "must be text")
+        if self.target_ldc is not None:
+            t = real("target_ldc", self.target_ldc)
+            if t < 1.0:
+                raise DesignError("target_ldc", self.target_ldc, "must be >= 1 (the mean tooth carries 1)")
+            _set(self, "target_ldc", t)
+        if self.confidence is not None:
+            c = real("confidence", self.confidence)
+            if not 0.0 < c < 1.0:
+                raise DesignError("confidence", self.confidence, "must be in (0, 1)")
+            _set(self, "confidence", c)
+
+    def flank_tolerances_um(self, n: int) -> dict[str, tuple[float, ...]]:
+        """Per-tooth tolerance (um) of every flank field (:data:`FLANK_FIELDS`), n values each."""
+        return {name: getattr(self, name) if getattr(self, name) is not None else (self.flank_um,) * n
+                for name in FLANK_FIELDS}
+
+    @property
+    def any_error(self) -> bool:
+        """True when some term has a tolerance above zero."""
+        flanks = any(v is not None and max(v, default=0.0) > 0 for v in
+                     (getattr(self, f) for f in FLANK_FIELDS))
+        return flanks or any(getattr(self, k) > 0 for k in (
+            "flank_um", "roller_diameter_um", "screw_eccentricity_um", "nut_eccentricity_um", "lead_um",
+            "temperature_k"))
 
 
 @dataclass(frozen=True)
@@ -272,8 +419,11 @@ class PRSDesign:
     nut: Nut = field(default_factory=Nut)
     materials: Materials = field(default_factory=Materials)
     loading: Loading = field(default_factory=Loading)
+    loads: LoadSettings = field(default_factory=LoadSettings)
     contact: ContactSettings = field(default_factory=ContactSettings)
     mesh: MeshSettings = field(default_factory=MeshSettings)
+    #: optional: present only when the designer states tolerances (io reads it as a table)
+    tolerances: Tolerances | None = field(default=None, metadata={"section": Tolerances})
 
     def __post_init__(self) -> None:
         check_name(self.name)
@@ -423,6 +573,13 @@ class PRSDesign:
         if s.length_mm < n * p:
             raise self._error("screw.length_mm", s.length_mm,
                               f"must be at least the engaged length n p = {n * p} mm")
+        tol = self.tolerances
+        if tol is not None:
+            for name in FLANK_FIELDS:
+                v = getattr(tol, name)
+                if v is not None and len(v) != n:
+                    raise self._error(f"tolerances.{name}", list(v),
+                                      f"must have engaged_teeth = {n} entries, has {len(v)}")
         for part, spec in (("roller", r), ("nut", u)):
             lst = spec.pitch_list_mm
             if lst is None:

@@ -55,6 +55,25 @@ FIELD_COMMENTS: dict[str, str] = {
     "contact.clearance_mm": "axial clearance left at the screw-roller contact by the corrected screw diameter (mm)",
     "contact.precision_mm": "precision of that clearance (mm)",
     "mesh.chord_tolerance_mm": "largest mesh deviation from the analytic surface (mm)",
+    "thermal_expansion_per_k": "linear thermal expansion coefficient alpha (1/K)",
+    "loads.tooth_width": 'width of the Yamamoto tooth terms: "circumference-share", "ring", "contact-ellipse" or "unit"',
+    "tolerances.distribution": '"uniform" (within +-T) or "normal" (T = 3 sigma)',
+    "tolerances.flank_um": "axial position tolerance of every loaded flank (um)",
+    "tolerances.screw_flank_um": "per-tooth tolerance of the screw flank (um), overrides flank_um",
+    "tolerances.roller_screw_flank_um": "per-tooth tolerance of the roller's screw-side flank (um)",
+    "tolerances.roller_nut_flank_um": "per-tooth tolerance of the roller's nut-side flank (um)",
+    "tolerances.nut_flank_um": "per-tooth tolerance of the nut flank (um)",
+    "tolerances.roller_diameter_um": "roller pitch-diameter tolerance (um, on the diameter)",
+    "tolerances.screw_eccentricity_um": "screw thread axis offset (um, half the radial run-out)",
+    "tolerances.nut_eccentricity_um": "nut thread axis offset (um, half the radial run-out)",
+    "tolerances.lead_um": "base-lead error accumulated over the engaged length (um)",
+    "tolerances.temperature_k": "temperature difference between parts (K)",
+    "tolerances.samples": "Monte Carlo samples of the build's tolerance study",
+    "tolerances.seed": "random seed of the study (same seed, same numbers)",
+    "tolerances.load_fractions": "loads of the study, as fractions of loading.axial_load_n",
+    "tolerances.source": "where these tolerances come from",
+    "tolerances.target_ldc": "worst load-distribution coefficient the synthesis targeted",
+    "tolerances.confidence": "probability of meeting target_ldc the synthesis guaranteed",
     "kind": 'kind of design: "prs" (default) or another product line',
     "format_version": "design-file format version (files without it are version 1)",
 }
@@ -104,7 +123,10 @@ def build_section(cls: type, data: Any, path: str = "") -> Any:
 
 
 def _nested_type(fld: dataclasses.Field) -> type | None:
-    """The dataclass type of a table field (its default factory), or None for a value."""
+    """The dataclass type of a table field (its default factory, or ``metadata["section"]``
+    for an optional table that is None when absent), or None for a value."""
+    if "section" in fld.metadata:
+        return fld.metadata["section"]
     factory = fld.default_factory
     return factory if isinstance(factory, type) and dataclasses.is_dataclass(factory) else None
 
@@ -324,3 +346,27 @@ def write_file_atomic(path: Path, text: str) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def load_spectrum(path: str | Path):
+    """A :class:`~prs_geom.model.spectrum.Spectrum` from a TOML file of ``[[case]]`` tables
+    (UTF-8); errors name the file, the case and the key."""
+    from prs_geom.model.spectrum import spectrum_from_dict
+    path = Path(path)
+    if not path.exists():
+        raise DesignError("spectrum file", str(path), "does not exist")
+    if path.is_dir():
+        raise DesignError("spectrum file", str(path), "is a folder, not a spectrum file")
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
+    text = decode_text(raw, str(path))
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError("spectrum file", str(path), f"is not valid TOML: {exc}") from None
+    try:
+        return spectrum_from_dict(data)
+    except DesignError as exc:
+        raise DesignError(f"spectrum file {str(path)!r}: {exc.field}", exc.value, exc.rule) from None

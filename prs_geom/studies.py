@@ -1,0 +1,417 @@
+"""Monte Carlo studies of a design, run in chunks that any backend can execute
+(docs/theory/tolerances.md, docs/scaleout.md).
+
+Sits at the pipeline layer: it builds the problems from the design (:mod:`prs_geom.analysis`),
+cuts the samples into chunks of :data:`CHUNK_SAMPLES` whatever the number of workers, gives
+every chunk its own :class:`numpy.random.SeedSequence` stream (``spawn_seeds(seed, k)``)
+and runs them through :func:`prs_geom.scaleout.run_chunks` (serial, joblib or Dask). The
+results are gathered in chunk order, so the same seed gives the same numbers, bit for bit,
+on any backend and any number of workers.
+
+* :func:`tolerance_study`: the distribution of the worst load-distribution coefficient, of
+  each side and of the roller load share under the design's error model, per load; the
+  importance ranking of the error terms.
+* :func:`synthesise`: the largest flank tolerance (uniform, and allocated per tooth) that
+  keeps the worst coefficient <= a target with a stated confidence, re-checked by an
+  independent run.
+* :func:`robust_pitch`: pitch lists that minimise a quantile of the worst coefficient over a
+  load spectrum and the error model, reported beside the constant and equal-load lists.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from prs_geom.analysis import tolerance as tol
+from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.analysis.loads import LoadModel, build_model, design_pitches, forward, with_pitch_lists
+from prs_geom.analysis.robust import PitchFamily, weighted_quantile
+from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
+from prs_geom.model.errors import DesignError
+from prs_geom.model.spectrum import Spectrum
+from prs_geom.progress import ProgressFn
+from prs_geom.scaleout import run_chunks, spawn_seeds
+
+#: Samples per chunk: fixed, so that the draws do not depend on the worker count.
+CHUNK_SAMPLES = 250
+#: Confidence level of the Clopper-Pearson bound of a synthesis.
+CP_LEVEL = 0.95
+#: Resolution of a synthesised tolerance (um): a shop states tolerances to 0.01 um at best.
+TOLERANCE_STEP_UM = 0.01
+#: Largest tolerance a synthesis tries (um).
+SYNTHESIS_MAX_UM = 50.0
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Where chunks run: ``workers`` joblib processes, or Dask (``scheduler`` "local" or
+    "tcp://host:port", ``dask_workers`` for a local cluster); ``progress`` callback."""
+
+    workers: int | None = 1
+    scheduler: Any = None
+    dask_workers: int | None = None
+    progress: ProgressFn | None = field(default=None, compare=False)
+
+    def map(self, task, payloads, stage: str, sizes=None) -> list:
+        return run_chunks(task, payloads, workers=self.workers, scheduler=self.scheduler,
+                          dask_workers=self.dask_workers, progress=self.progress, stage=stage, sizes=sizes)
+
+
+def _chunks(samples: int, seed: int) -> list[tuple[np.random.SeedSequence, int]]:
+    k = max(1, -(-samples // CHUNK_SAMPLES))
+    seeds = spawn_seeds(seed, k)
+    sizes = [min(CHUNK_SAMPLES, samples - i * CHUNK_SAMPLES) for i in range(k)]
+    return list(zip(seeds, sizes))
+
+
+def _run(problem: tol.StudyProblem, samples: int, seed: int, execution: Execution, stage: str,
+         variants: Sequence[tol.ErrorModel] = ()) -> list[tol.SampleStats]:
+    """Stats of the full model and of each variant over all chunks, in chunk order."""
+    chunks = _chunks(samples, seed)
+    tasks = [tol.ChunkTask(problem, s, c, tuple(variants)) for s, c in chunks]
+    parts = execution.map(tol.run_chunk, tasks, stage, sizes=[c for _, c in chunks])
+    return [tol.SampleStats.concatenate([p[i] for p in parts]) for i in range(1 + len(variants))]
+
+
+# --------------------------------------------------------------------------- study
+@dataclass(frozen=True)
+class ToleranceStudy:
+    """Result of :func:`tolerance_study`. ``stats``: per-sample results (L loads, B samples);
+    ``deterministic``: worst coefficients (L, 2) with no error; ``importance``: variance
+    shares of the active term groups; ``section``: the report section."""
+
+    tolerances: Tolerances
+    load_fractions: tuple[float, ...]
+    stats: tol.SampleStats
+    deterministic: NDArray
+    importance: list[dict[str, Any]]
+    section: dict[str, Any]
+
+    @property
+    def worst(self) -> NDArray:
+        """Each sample's worst coefficient over both sides and every load, (B,)."""
+        return self.stats.worst.max(axis=0)
+
+
+def _context(design: PRSDesign, contact: ContactResult | None, model: LoadModel | None):
+    contact = contact if contact is not None else analyse_contact(design)
+    model = model if model is not None else build_model(design, contact)
+    return contact, model
+
+
+def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
+                    contact: ContactResult | None = None, model: LoadModel | None = None,
+                    execution: Execution = Execution(), importance: bool = True,
+                    loads_n: Sequence[float] | None = None) -> ToleranceStudy:
+    """Monte Carlo study of ``design`` under ``tolerances`` (default: the design's
+    ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
+    fractions (or at ``loads_n``, N), all z rollers side by side."""
+    tolerances = tolerances or design.tolerances
+    if tolerances is None:
+        raise DesignError("tolerances", None, "the design has no [tolerances] section and none was given")
+    contact, model = _context(design, contact, model)
+    errors = tol.error_model(design, contact, tolerances)
+    F0 = design.loading.axial_load_n
+    fractions = tuple(tolerances.load_fractions) if loads_n is None else tuple(F / F0 for F in loads_n)
+    problem = tol.study_problem(design, model, errors, fractions)
+    groups = [g for g, terms in tol.GROUPS.items() if any(t in errors.active_terms() for t in terms)]
+    variants = [errors.only(tol.GROUPS[g]) for g in groups] if importance and len(groups) > 0 else []
+    results = _run(problem, tolerances.samples, tolerances.seed, execution, "tolerance", variants)
+    stats = results[0]
+    det = np.array([[float(r.ldc_nr.max()), float(r.ldc_rs.max())]
+                    for r in (forward(design, F, model=model) for F in problem.loads_n)])
+    ranking = tol.variance_shares(stats.worst.max(axis=0),
+                                  {g: r.worst.max(axis=0) for g, r in zip(groups, results[1:])}) if variants else []
+    section = _study_section(design, tolerances, problem, stats, det, ranking)
+    return ToleranceStudy(tolerances, fractions, stats, det, ranking, section)
+
+
+def _tolerances_dict(t: Tolerances, n: int) -> dict[str, Any]:
+    d = {k: getattr(t, k) for k in ("distribution", "flank_um", "roller_diameter_um", "screw_eccentricity_um",
+                                    "nut_eccentricity_um", "lead_um", "temperature_k", "source")}
+    per = t.flank_tolerances_um(n)
+    d["per_tooth_flank_um"] = {k: list(v) for k, v in per.items()}
+    if t.target_ldc is not None:
+        d["target_ldc"] = t.target_ldc
+    if t.confidence is not None:
+        d["confidence"] = t.confidence
+    return d
+
+
+def _study_section(design: PRSDesign, t: Tolerances, problem: tol.StudyProblem, stats: tol.SampleStats,
+                   det: NDArray, ranking: list[dict[str, Any]]) -> dict[str, Any]:
+    F0 = design.loading.axial_load_n
+    cases = []
+    for i, F in enumerate(problem.loads_n):
+        cases.append({
+            "load_fraction": F / F0, "load_N": F,
+            "worst_ldc": tol.summary(stats.worst[i]),
+            "nut_roller": tol.summary(stats.worst_nr[i]),
+            "roller_screw": tol.summary(stats.worst_rs[i]),
+            "roller_load_share_max": tol.summary(stats.share_max[i]),
+            "roller_load_share_min": tol.summary(stats.share_min[i]),
+            "deterministic": {"nut_roller": float(det[i, 0]), "roller_screw": float(det[i, 1]),
+                              "worst_ldc": float(det[i].max())},
+            "samples_with_open_teeth": int((stats.open_teeth[i] > 0).sum()),
+        })
+    return {
+        "samples": int(stats.worst.shape[1]), "seed": t.seed,
+        "chunk_samples": CHUNK_SAMPLES,
+        "tolerances": _tolerances_dict(t, design.thread.engaged_teeth),
+        "load_fractions": [F / F0 for F in problem.loads_n],
+        "worst_ldc": tol.summary(stats.worst.max(axis=0)),
+        "deterministic_worst_ldc": float(det.max()),
+        "sides": {"nut_roller": tol.summary(stats.worst_nr.max(axis=0)),
+                  "roller_screw": tol.summary(stats.worst_rs.max(axis=0))},
+        "roller_load_share": {"max": tol.summary(stats.share_max.max(axis=0)),
+                              "min": tol.summary(stats.share_min.min(axis=0))},
+        "cases": cases,
+        "importance": ranking,
+        "definitions": {
+            "worst_ldc": "per sample: the largest tooth load of any roller, tooth and side, divided by "
+                         "the mean tooth load F / (n z), over every load of the study",
+            "roller_load_share": "load of a roller divided by F / z (1 = equal sharing)",
+            "importance": "variance of the worst coefficient with one error group switched on at a "
+                          "time (same draws), as shares of their sum",
+        },
+    }
+
+
+# --------------------------------------------------------------------------- synthesis
+@dataclass(frozen=True)
+class SynthesisResult:
+    """Result of :func:`synthesise` (tolerances in um)."""
+
+    target_ldc: float
+    confidence: float
+    feasible: bool
+    uniform_um: float
+    allocation_um: dict[str, tuple[float, ...]]
+    influence_per_um: dict[str, NDArray]
+    checks: dict[str, Any]
+    tolerances: Tolerances | None
+
+    def report(self) -> dict[str, Any]:
+        return {"target_ldc": self.target_ldc, "confidence": self.confidence,
+                "confidence_bound": f"one-sided Clopper-Pearson lower bound at {CP_LEVEL:.0%}",
+                "feasible": self.feasible, "uniform_flank_um": self.uniform_um,
+                "per_tooth_flank_um": {k: list(v) for k, v in self.allocation_um.items()},
+                "influence_ldc_per_um": {k: v.tolist() for k, v in self.influence_per_um.items()},
+                "checks": self.checks}
+
+
+def _success(problem: tol.StudyProblem, samples: int, seed: int, execution: Execution, target: float,
+             stage: str) -> tuple[int, NDArray]:
+    stats = _run(problem, samples, seed, execution, stage)[0]
+    worst = stats.worst.max(axis=0)
+    return int((worst <= target).sum()), worst
+
+
+def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: Tolerances | None = None, *,
+               samples: int = 1000, seed: int = 0, verify_seed: int | None = None,
+               load_fractions: Sequence[float] = (1.0,), contact: ContactResult | None = None,
+               model: LoadModel | None = None, execution: Execution = Execution()) -> SynthesisResult:
+    """Largest flank tolerance with P(worst coefficient <= ``target_ldc``) >= ``confidence``.
+
+    The other error terms keep the values of ``base`` (default: none). The flank tolerance
+    is searched on a grid of :data:`TOLERANCE_STEP_UM` by bisection on common draws; a
+    tolerance passes when the one-sided Clopper-Pearson lower bound (:data:`CP_LEVEL`) of the
+    success probability is >= ``confidence``. Two forms: uniform (every flank the same T) and
+    allocated (T_j = w_j T_mean with w_j from :func:`~prs_geom.analysis.tolerance.allocation_weights`,
+    inverse to each flank's linearised influence). Each is re-checked by an independent run
+    from ``verify_seed`` (default seed + 1)."""
+    if target_ldc < 1.0:
+        raise DesignError("--target-ldc", target_ldc, "must be >= 1 (the mean tooth carries 1)")
+    if not 0.0 < confidence < 1.0:
+        raise DesignError("--confidence", confidence, "must be in (0, 1)")
+    contact, model = _context(design, contact, model)
+    n = design.thread.engaged_teeth
+    base = replace(base or Tolerances(), flank_um=0.0, screw_flank_um=None, roller_screw_flank_um=None,
+                   roller_nut_flank_um=None, nut_flank_um=None)
+    errors0 = tol.error_model(design, contact, base)
+    problem0 = tol.study_problem(design, model, errors0, load_fractions)
+    verify_seed = seed + 1 if verify_seed is None else verify_seed
+
+    # linearised influence of each flank at the design load, with a unit flank model
+    unit = tol.error_model(design, contact, replace(base, flank_um=1.0))
+    G, _ = tol.linear_influence(replace(problem0, errors=unit), design.loading.axial_load_n)
+    influence = tol.flank_influence(G, unit)
+    weights = tol.allocation_weights(influence)
+
+    def model_for(per_tooth: dict[str, NDArray]) -> tol.ErrorModel:
+        t = replace(base, **{k: tuple(map(float, v)) for k, v in per_tooth.items()})
+        return tol.error_model(design, contact, t)
+
+    def passes(units: int, w: dict[str, NDArray] | None) -> tuple[bool, int]:
+        T = units * TOLERANCE_STEP_UM
+        per = {k: (np.full(n, T) if w is None else _round_down(w[k] * T)) for k in FLANK_FIELDS}
+        prob = replace(problem0, errors=model_for(per))
+        k, _ = _success(prob, samples, seed, execution, target_ldc, "synthesis")
+        return tol.clopper_pearson_lower(k, samples, CP_LEVEL) >= confidence, k
+
+    def search(w: dict[str, NDArray] | None) -> tuple[int, int]:
+        ok0, k0 = passes(0, w)
+        if not ok0:
+            return -1, k0
+        lo, hi = 0, 50                                   # 0.5 um
+        limit = int(round(SYNTHESIS_MAX_UM / TOLERANCE_STEP_UM))
+        while True:
+            ok, _ = passes(hi, w)
+            if not ok:
+                break
+            lo = hi
+            if hi >= limit:
+                return limit, samples
+            hi = min(2 * hi, limit)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if passes(mid, w)[0]:
+                lo = mid
+            else:
+                hi = mid
+        return lo, 0
+
+    units_u, k_zero = search(None)
+    if units_u < 0:
+        checks = {"zero_flank_tolerance_successes": k_zero, "samples": samples,
+                  "reason": "the target is not met even with exact flanks (the other error terms or the "
+                            "pitch lists alone exceed it)"}
+        return SynthesisResult(target_ldc, confidence, False, 0.0, {}, influence, checks, None)
+    units_a, _ = search(weights)
+    T_u = units_u * TOLERANCE_STEP_UM
+    alloc = {k: tuple(map(float, _round_down(weights[k] * units_a * TOLERANCE_STEP_UM))) for k in FLANK_FIELDS}
+
+    checks: dict[str, Any] = {"samples": samples, "seed": seed, "verify_seed": verify_seed,
+                              "load_fractions": list(load_fractions)}
+    for name, per in (("uniform", {k: np.full(n, T_u) for k in FLANK_FIELDS}),
+                      ("allocated", {k: np.array(v) for k, v in alloc.items()})):
+        prob = replace(problem0, errors=model_for(per))
+        k_s, _ = _success(prob, samples, seed, execution, target_ldc, "synthesis")
+        k_v, worst_v = _success(prob, samples, verify_seed, execution, target_ldc, "verification")
+        checks[name] = {
+            "successes": k_s, "fraction": k_s / samples,
+            "clopper_pearson_lower": tol.clopper_pearson_lower(k_s, samples, CP_LEVEL),
+            "verification": {"successes": k_v, "fraction": k_v / samples,
+                             "clopper_pearson_lower": tol.clopper_pearson_lower(k_v, samples, CP_LEVEL),
+                             "meets_confidence": bool(k_v / samples >= confidence),
+                             "worst_ldc": tol.summary(worst_v)},
+        }
+    source = (f"synthesised by prs-geom tolerance: target worst LDC {target_ldc:g} with probability "
+              f"{confidence:g} ({CP_LEVEL:.0%} Clopper-Pearson bound), {samples} samples, seed {seed}, "
+              f"re-checked with seed {verify_seed}; uniform alternative {T_u:.2f} um")
+    written = replace(base, **alloc, flank_um=T_u, source=source, target_ldc=target_ldc, confidence=confidence,
+                      seed=seed, samples=samples, load_fractions=tuple(load_fractions))
+    return SynthesisResult(target_ldc, confidence, True, T_u, alloc, influence, checks, written)
+
+
+def _round_down(values_um: NDArray) -> NDArray:
+    return np.floor(np.asarray(values_um) / TOLERANCE_STEP_UM + 1e-9) * TOLERANCE_STEP_UM
+
+
+# --------------------------------------------------------------------------- robust pitch
+@dataclass(frozen=True)
+class _RobustTask:
+    problem: tol.StudyProblem
+    family: PitchFamily
+    point: tuple[float, float]
+    seeds: tuple[tuple[np.random.SeedSequence, int], ...]
+
+
+def _robust_eval(task: _RobustTask) -> NDArray:
+    """Worst coefficients (L, B) of one member of the family on the study's draws."""
+    e = task.problem.errors
+    roller, nut = task.family.lists(*task.point)
+    # gaps of the member's lists: the designed gaps of every roller
+    g_nr, g_rs = _member_gaps(roller, nut, task.family.pitch_mm, e.z)
+    prob = task.problem.with_gaps(g_nr, g_rs)
+    parts = [tol.evaluate(prob, e.sample(s, c)).worst for s, c in task.seeds]
+    return np.concatenate(parts, axis=1)
+
+
+def _member_gaps(roller: NDArray, nut: NDArray, p: float, z: int) -> tuple[NDArray, NDArray]:
+    # as loads.gap_terms: cumulative differences from tooth 1, in full precision
+    zero = np.zeros(1)
+    g_nr = np.concatenate([zero, np.cumsum((roller - p) - (nut - p))])
+    g_rs = np.concatenate([zero, np.cumsum(-(roller - p))])
+    return np.tile(g_nr, (z, 1)), np.tile(g_rs, (z, 1))
+
+
+@dataclass(frozen=True)
+class RobustResult:
+    """Result of :func:`robust_pitch`: the chosen member (a_nr, a_rs), its pitch lists and
+    the comparison of constant, equal-at-design-load and robust on the same samples."""
+
+    a_nr: float
+    a_rs: float
+    design: PRSDesign
+    comparison: dict[str, Any]
+    evaluations: int
+
+    def report(self) -> dict[str, Any]:
+        return {"a_nut_roller": self.a_nr, "a_roller_screw": self.a_rs, "evaluations": self.evaluations,
+                **self.comparison}
+
+
+def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances | None = None, *,
+                 quantile: float = 0.95, samples: int = 200, seed: int = 0,
+                 contact: ContactResult | None = None, model: LoadModel | None = None,
+                 execution: Execution = Execution(), grid: Sequence[float] = (0.0, 0.25, 0.5, 0.75, 1.0, 1.25),
+                 name: str | None = None) -> RobustResult:
+    """Pitch lists minimising the ``quantile`` of the worst coefficient over ``spectrum``
+    and the error model ``tolerances`` (default: the design's, else no errors): a grid over
+    the family of :mod:`prs_geom.analysis.robust` (run in parallel), then Nelder-Mead from
+    the best grid point, on common draws. Constant pitch (0, 0) and equal-at-design-load
+    (1, 1) are members of the grid, so the result is never worse than either on the
+    objective."""
+    from scipy import optimize
+    if not 0.0 < quantile < 1.0:
+        raise DesignError("--quantile", quantile, "must be in (0, 1)")
+    tolerances = tolerances or design.tolerances or Tolerances()
+    contact, model = _context(design, contact, model)
+    errors = tol.error_model(design, contact, tolerances)
+    F0 = design.loading.axial_load_n
+    problem = tol.study_problem(design, model, errors, [F / F0 for F in spectrum.loads_n])
+    family = PitchFamily.from_equal_load(design, design_pitches(design, model=model))
+    seeds = tuple(_chunks(samples, seed))
+    weights = spectrum.weights
+    points = [(a, b) for a in grid for b in grid]
+    if (1.0, 1.0) not in points:
+        points.append((1.0, 1.0))
+    tasks = [_RobustTask(problem, family, pt, seeds) for pt in points]
+    worst = execution.map(_robust_eval, tasks, "robust grid")
+    cache = {pt: w for pt, w in zip(points, worst)}
+
+    def objective(v: NDArray) -> float:
+        pt = (float(v[0]), float(v[1]))
+        if pt not in cache:
+            cache[pt] = _robust_eval(_RobustTask(problem, family, pt, seeds))
+        return weighted_quantile(cache[pt], weights, quantile)
+
+    best = min(points, key=lambda pt: objective(np.array(pt)))
+    res = optimize.minimize(objective, np.array(best), method="Nelder-Mead",
+                            options={"xatol": 1e-3, "fatol": 1e-7, "maxfev": 60,
+                                     "initial_simplex": np.array(best) + np.array([[0, 0], [0.1, 0], [0, 0.1]])})
+    cand = [tuple(map(float, res.x)), best]
+    a_nr, a_rs = min(cand, key=lambda pt: objective(np.array(pt)))
+
+    def describe(pt: tuple[float, float]) -> dict[str, Any]:
+        w = cache[pt]
+        return {"objective": weighted_quantile(w, weights, quantile),
+                "cases": [{"load_N": F, "weight": float(wt), **{k: v for k, v in tol.summary(w[i]).items()}}
+                          for i, (F, wt) in enumerate(zip(spectrum.loads_n, weights))]}
+
+    comparison = {
+        "objective": f"{quantile:g} quantile of the worst LDC over the spectrum (weighted by "
+                     f"{spectrum.weighting}) and {samples} error samples (seed {seed})",
+        "quantile": quantile, "samples": samples, "seed": seed, "spectrum": spectrum.as_dict(),
+        "tolerances": _tolerances_dict(tolerances, design.thread.engaged_teeth),
+        "constant_pitch": describe((0.0, 0.0)),
+        "equal_at_design_load": describe((1.0, 1.0)),
+        "robust": describe((a_nr, a_rs)),
+    }
+    new = with_pitch_lists(design, family.pitch_design(a_nr, a_rs), name)
+    return RobustResult(a_nr, a_rs, new, comparison, len(cache))
