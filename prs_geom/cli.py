@@ -451,6 +451,17 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
     return EXIT_OK
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from prs_geom import sweep
+
+    design = _load(args.design)
+    _warn(design)
+    if args.out:
+        check_output_file(args.out, args.force)        # refuse before the work
+    return sweep.run(args, design, progress=silent if args.quiet or args.json else StderrProgress(),
+                     write_out=lambda text: _write_out_file(args.out, text, args.force))
+
+
 def cmd_harmonic(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -526,7 +537,8 @@ def make_parser() -> argparse.ArgumentParser:
 
     def scale_args(q: argparse.ArgumentParser) -> None:
         g = q.add_argument_group("where the work runs (same seed, same numbers on any of them)")
-        g.add_argument("--workers", type=int, metavar="N", help="local worker processes (joblib; default 1)")
+        g.add_argument("--workers", type=int, metavar="N",
+                       help="local worker processes (joblib; default one per CPU, 1 = no extra process)")
         g.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
                        "or 'local' (needs pip install \"prs-geom[dask]\")")
         g.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
@@ -628,6 +640,18 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress output")
     scale_args(p)
     p.set_defaults(func=cmd_tolerance)
+
+    from prs_geom import sweep as sweep_cli
+
+    p = sub.add_parser("sweep", help="design-space sweep: every combination of starts, rollers, pitch, teeth",
+                       description="Evaluate every combination of the given screw/nut starts, roller counts, "
+                                   "pitches, engaged teeth and load fractions on a base design: validity (or "
+                                   "the rule a point breaks), worst LDC at constant pitch and of the equal-load "
+                                   "graded design at 25/50/100/150 % load, axial stiffness and the largest "
+                                   "pitch correction (docs/scaleout.md).")
+    design_arg(p)
+    sweep_cli.add_arguments(p)
+    p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
                        description="Ratio of the conical-circular-spline harmonic friction drive "

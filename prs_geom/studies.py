@@ -48,10 +48,11 @@ SYNTHESIS_MAX_UM = 50.0
 
 @dataclass(frozen=True)
 class Execution:
-    """Where chunks run: ``workers`` joblib processes, or Dask (``scheduler`` "local" or
-    "tcp://host:port", ``dask_workers`` for a local cluster); ``progress`` callback."""
+    """Where chunks run: ``workers`` joblib processes (default: one per CPU; 1 = in this
+    process), or Dask (``scheduler`` "local" or "tcp://host:port", ``dask_workers`` for a
+    local cluster); ``progress`` callback. The numbers do not depend on the choice."""
 
-    workers: int | None = 1
+    workers: int | None = None
     scheduler: Any = None
     dask_workers: int | None = None
     progress: ProgressFn | None = field(default=None, compare=False)

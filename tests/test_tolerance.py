@@ -248,3 +248,13 @@ def test_tolerances_validation_names_field():
         Tolerances(distribution="gauss")
     with pytest.raises(DesignError, match=r"load_fractions\[1\]"):
         Tolerances(load_fractions=(1.0, -2.0))
+
+
+def test_sample_does_not_depend_on_earlier_draws(graded):
+    """The same SeedSequence object sampled twice gives the same draws (no hidden spawn state)."""
+    d, c, _ = graded
+    em = T.error_model(d, c, Tolerances(flank_um=1.0))
+    ss = np.random.SeedSequence(5).spawn(2)[1]
+    first = em.sample(ss, 7)
+    assert np.array_equal(em.sample(ss, 7), first)
+    assert np.array_equal(em.sample(np.random.SeedSequence(5).spawn(2)[1], 7), first)

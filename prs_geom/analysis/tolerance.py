@@ -209,7 +209,10 @@ class ErrorModel:
         term off or scaling it leaves the draws of every other term unchanged (common random
         numbers for the importance ranking and the synthesis)."""
         ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-        streams = ss.spawn(len(TERMS))
+        # the children spawn() would make, built without spawn(): spawn() counts its calls on
+        # the parent, so a second sample() from the same object would draw other numbers
+        streams = [np.random.SeedSequence(ss.entropy, spawn_key=ss.spawn_key + (k,), pool_size=ss.pool_size)
+                   for k in range(len(TERMS))]
         x = np.empty((count, self.size))
         for t, child in zip(TERMS, streams):
             rng = np.random.default_rng(child)
