@@ -283,7 +283,7 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
                             "pitch lists alone exceed it)"}
         return SynthesisResult(target_ldc, confidence, False, 0.0, {}, influence, checks, None)
     units_a, _ = search(weights)
-    T_u = units_u * TOLERANCE_STEP_UM
+    T_u = round(units_u * TOLERANCE_STEP_UM, 6)
     alloc = {k: tuple(map(float, _round_down(weights[k] * units_a * TOLERANCE_STEP_UM))) for k in FLANK_FIELDS}
 
     checks: dict[str, Any] = {"samples": samples, "seed": seed, "verify_seed": verify_seed,
@@ -310,7 +310,10 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
 
 
 def _round_down(values_um: NDArray) -> NDArray:
-    return np.floor(np.asarray(values_um) / TOLERANCE_STEP_UM + 1e-9) * TOLERANCE_STEP_UM
+    """Down to the grid of TOLERANCE_STEP_UM, as the decimal a drawing states (0.57, not
+    0.5700000000000001)."""
+    steps = np.floor(np.asarray(values_um) / TOLERANCE_STEP_UM + 1e-9)
+    return np.round(steps * TOLERANCE_STEP_UM, 6)
 
 
 # --------------------------------------------------------------------------- robust pitch

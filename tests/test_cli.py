@@ -1,4 +1,5 @@
 """CLI behaviour: exit codes, error messages, atomic output (issue 2)."""
+import dataclasses
 import math
 import subprocess
 import sys
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 from cli_helpers import run, to_toml
 from prs_geom import pipeline
 from prs_geom.model.io import design_to_dict
-from prs_geom.model.design import default_design
+from prs_geom.model.design import Tolerances, default_design
 
 
 def _write(data, path):
@@ -79,6 +80,27 @@ INVALID = {
     "contact.clearance_mm": out_of(0.0, 0.1),
     "contact.precision_mm": out_of(1e-13, 1e-4),
     "mesh.chord_tolerance_mm": out_of(1e-4, 0.1),
+    **{f"materials.{part}.thermal_expansion_per_k": out_of(0.0, 1e-3) for part in ("screw", "roller", "nut")},
+    "loads.tooth_width": bad_choice(("circumference-share", "ring", "contact-ellipse", "unit")),
+    # the optional [tolerances] section
+    "tolerances.distribution": bad_choice(("uniform", "normal")),
+    **{f"tolerances.{k}": out_of(0.0, 100.0) for k in ("flank_um", "roller_diameter_um", "screw_eccentricity_um",
+                                                         "nut_eccentricity_um", "lead_um")},
+    "tolerances.temperature_k": out_of(0.0, 200.0),
+    **{f"tolerances.{k}": st.one_of(st.lists(st.just(0.5), max_size=30).filter(lambda l: len(l) != 20),
+                                     st.lists(st.floats(-10, -0.01), min_size=20, max_size=20), st.text(max_size=3))
+       for k in ("screw_flank_um", "roller_screw_flank_um", "roller_nut_flank_um", "nut_flank_um")},
+    "tolerances.samples": bad_int(1, 10_000_000),
+    "tolerances.seed": st.one_of(st.integers(min_value=-(2 ** 63), max_value=-1), st.floats(allow_nan=False),
+                                 st.text(max_size=3), st.booleans()),
+    "tolerances.load_fractions": st.one_of(st.just([]), st.lists(st.floats(-5, 0), min_size=1, max_size=3),
+                                           st.lists(st.floats(10.01, 1e6), min_size=1, max_size=3), st.text(max_size=3)),
+    "tolerances.source": st.one_of(st.integers(), st.floats(allow_nan=False), st.booleans()),
+    "tolerances.target_ldc": st.one_of(st.floats(max_value=0.999, allow_nan=False, allow_infinity=False),
+                                       st.text(max_size=3)),
+    "tolerances.confidence": st.one_of(st.floats(max_value=0.0, allow_nan=False, allow_infinity=False),
+                                       st.floats(min_value=1.0, allow_nan=False, allow_infinity=False),
+                                       st.text(max_size=3)),
 }
 
 
@@ -93,6 +115,7 @@ def test_every_design_field_has_an_invalid_case():
 
     walk(design_to_dict(default_design()), "")
     leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
+    leaves |= {f"tolerances.{f.name}" for f in dataclasses.fields(Tolerances)}  # optional section
     assert leaves == set(INVALID)
 
 

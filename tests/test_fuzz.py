@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run, to_toml
-from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
+from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread, Tolerances
 from prs_geom.model.io import design_to_dict, dumps_toml
 from prs_geom.pipeline import load_any_design as load_design
 
@@ -40,6 +40,9 @@ def _with_header(d: dict, kind: str | None = None) -> dict:
 BASES = [
     _with_header(design_to_dict(PRSDesign())),
     _with_header(design_to_dict(TINY)),
+    # the optional [tolerances] section (added after the first fuzzing), with per-tooth lists
+    _with_header(design_to_dict(PRSDesign(name="toleranced", tolerances=Tolerances(
+        flank_um=0.5, nut_flank_um=(0.4,) * 20, roller_diameter_um=1.0, samples=5, load_fractions=(0.5, 1.0))))),
     _with_header(design_to_dict(load_design(EXAMPLES / "graded-pitch.toml"))),
     _with_header(design_to_dict(load_design(EXAMPLES / "harmonic.toml")), "harmonic"),
 ]
