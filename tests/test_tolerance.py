@@ -258,3 +258,24 @@ def test_sample_does_not_depend_on_earlier_draws(graded):
     first = em.sample(ss, 7)
     assert np.array_equal(em.sample(ss, 7), first)
     assert np.array_equal(em.sample(np.random.SeedSequence(5).spawn(2)[1], 7), first)
+
+
+def test_build_of_toleranced_design_reports_the_study(tmp_path):
+    """A design with [tolerances] gets the study in report.json (schema-checked by conftest),
+    report.html and the plot; the numbers are those of the tolerance command."""
+    from prs_geom.pipeline import build
+
+    d = PRSDesign(name="tol", thread=default_design().thread,
+                  tolerances=Tolerances(flank_um=0.5, nut_eccentricity_um=1.0, samples=30, seed=4,
+                                        load_fractions=(0.5, 1.0)))
+    rep = build(d, tmp_path / "out")
+    sec = rep["tolerance"]
+    direct = studies.tolerance_study(d)
+    assert json.dumps(sec, sort_keys=True) == json.dumps(direct.section, sort_keys=True)
+    assert {"tolerance_ldc.png", "tolerance_ldc.svg"} <= set(rep["files"])
+    html = (tmp_path / "out" / "report.html").read_text(encoding="utf-8")
+    assert "Tolerances and load sharing" in html and f"{sec['worst_ldc']['p95']:.6g}"[:5] in html
+    assert [r["term"] for r in sec["importance"]] and sec["samples"] == 30
+    code, out, err = _run(["tolerance", str(tmp_path / "out" / "design.toml"), "--json", "--workers", "1"])
+    assert code == 0, err
+    assert json.loads(out)["worst_ldc"] == sec["worst_ldc"]
