@@ -372,9 +372,7 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         return EXIT_OK if res.feasible else EXIT_FOUND
     if args.out:
         raise UsageError("--out writes synthesised tolerances: give --target-ldc")
-    if args.confidence is not None:
-        raise UsageError("--confidence goes with --target-ldc")
-    study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads)
+    study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence)
     if args.json:
         _print_json(study.section)
         return EXIT_OK
@@ -391,6 +389,11 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
     w = s["worst_ldc"]
     print(f"worst LDC over all loads: median {w['median']:.4f}, p95 {w['p95']:.4f}, p99 {w['p99']:.4f}, "
           f"max {w['max']:.4f}")
+    if "at_confidence" in s:
+        a = s["at_confidence"]
+        ub = "n/a (too few samples)" if a["upper_bound_95"] is None else f"{a['upper_bound_95']:.4f}"
+        print(f"with probability {a['confidence']:g}: worst LDC <= {a['worst_ldc_quantile']:.4f} "
+              f"(95 % upper bound {ub})")
     for row in s["importance"]:
         print(f"  {row['term']:<20} {row['share'] * 100:6.1f} % of the variance")
     return EXIT_OK
@@ -632,7 +635,8 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--spectrum", metavar="FILE", help="loads from a spectrum file ([[case]] load_n, time_share)")
     p.add_argument("--target-ldc", type=float, metavar="L", help="synthesise: worst LDC to hold")
     p.add_argument("--confidence", type=float, metavar="C",
-                   help="probability of holding --target-ldc (default 0.95), as a Clopper-Pearson bound")
+                   help="with --target-ldc: probability of holding it (default 0.95, as a Clopper-Pearson "
+                        "bound); without: report the worst LDC not exceeded with probability C")
     p.add_argument("--out", metavar="NEW.toml", help="with --target-ldc: write the design with the "
                                                      "synthesised [tolerances] section")
     p.add_argument("--force", action="store_true", help="replace an existing --out file")

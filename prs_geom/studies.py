@@ -107,7 +107,7 @@ def _context(design: PRSDesign, contact: ContactResult | None, model: LoadModel 
 def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                     contact: ContactResult | None = None, model: LoadModel | None = None,
                     execution: Execution = Execution(), importance: bool = True,
-                    loads_n: Sequence[float] | None = None) -> ToleranceStudy:
+                    loads_n: Sequence[float] | None = None, confidence: float | None = None) -> ToleranceStudy:
     """Monte Carlo study of ``design`` under ``tolerances`` (default: the design's
     ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
     fractions (or at ``loads_n``, N), all z rollers side by side."""
@@ -128,6 +128,17 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
     ranking = tol.variance_shares(stats.worst.max(axis=0),
                                   {g: r.worst.max(axis=0) for g, r in zip(groups, results[1:])}) if variants else []
     section = _study_section(design, tolerances, problem, stats, det, ranking)
+    if confidence is not None:
+        if not 0.0 < confidence < 1.0:
+            raise DesignError("--confidence", confidence, "must be in (0, 1)")
+        worst = stats.worst.max(axis=0)
+        section["at_confidence"] = {
+            "confidence": confidence,
+            "worst_ldc_quantile": float(np.quantile(worst, confidence)),
+            "upper_bound_95": tol.quantile_upper_bound(worst, confidence, CP_LEVEL),
+            "meaning": f"the worst LDC stays below worst_ldc_quantile in a fraction {confidence:g} of the "
+                       f"samples; upper_bound_95 bounds that quantile of the population with 95 % "
+                       f"confidence (order statistic; null if the sample is too small)"}
     return ToleranceStudy(tolerances, fractions, stats, det, ranking, section)
 
 

@@ -392,6 +392,15 @@ def clopper_pearson_lower(successes: int, trials: int, level: float = 0.95) -> f
     return float(stats.beta.ppf(1.0 - level, successes, trials - successes + 1))
 
 
+def quantile_upper_bound(values: NDArray, q: float, level: float = 0.95) -> float | None:
+    """Distribution-free upper confidence bound (at ``level``) of the q-quantile of the
+    population a sample was drawn from: the order statistic X_(k) with the smallest k such that
+    P(Binomial(N, q) < k) >= level. None when the sample is too small for that level."""
+    v = np.sort(np.asarray(values, dtype=np.float64).ravel())
+    k = int(stats.binom.ppf(level, v.size, q)) + 1          # 1-based rank
+    return float(v[k - 1]) if k <= v.size else None
+
+
 def variance_shares(total: NDArray, per_term: dict[str, NDArray]) -> list[dict[str, Any]]:
     """Importance ranking: the variance of the worst coefficient with one term switched on
     at a time (common draws), as shares of their sum, largest first; ``interaction`` is the
