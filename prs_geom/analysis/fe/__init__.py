@@ -1,0 +1,30 @@
+"""Finite-element model of the thread teeth (axisymmetric, linear elastic, scikit-fem).
+
+Owns the structured graded meshes of a part's engaged section
+(:mod:`~prs_geom.analysis.fe.mesh`), the axisymmetric elasticity form and solver
+(:mod:`~prs_geom.analysis.fe.axisym`), the Hertz band and its half-plane local term
+(:mod:`~prs_geom.analysis.fe.halfplane`) and, from a design, the teeth's influence
+matrices and the calibration of Yamamoto's tooth width (:mod:`~prs_geom.analysis.fe.teeth`).
+Pure math like the rest of :mod:`prs_geom.analysis`: numpy, scipy and scikit-fem, no file
+I/O and no mesh library. docs/theory/fe.md explains the model.
+
+scikit-fem is the optional extra ``fe`` (in the test extra): without it, importing this
+package raises :class:`~prs_geom.model.errors.EnvironmentFailure` (exit code 3 in the CLI)
+with the install command.
+"""
+try:
+    import skfem  # noqa: F401
+except ImportError:  # pragma: no cover - exercised by tests/test_fe.py with the import blocked
+    from prs_geom.model.errors import EnvironmentFailure
+
+    raise EnvironmentFailure('the finite-element model needs scikit-fem: pip install "prs-geom[fe]"') from None
+
+from prs_geom.analysis.fe.teeth import (CONVERGED_LEVEL, DEFAULT_TEETH, ConvergenceStudy, InfluenceMatrices,
+                                        LoadedFlank, PartInfluence, PartSection, ToothCalibration, WidthCalibration,
+                                        band_loads, calibrate_tooth_width, convergence_study, influence_matrices,
+                                        part_influence, part_sections, richardson)
+
+__all__ = ["CONVERGED_LEVEL", "DEFAULT_TEETH", "ConvergenceStudy", "InfluenceMatrices", "LoadedFlank",
+           "PartInfluence", "PartSection", "ToothCalibration", "WidthCalibration", "band_loads",
+           "calibrate_tooth_width", "convergence_study", "influence_matrices", "part_influence", "part_sections",
+           "richardson"]
