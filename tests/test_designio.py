@@ -71,3 +71,11 @@ def test_dict_form_omits_absent_pitch_lists():
     data = design_to_dict(default_design())
     assert "pitch_list_mm" not in data["roller"]
     assert data["materials"]["screw"]["youngs_modulus_mpa"] == 212000.0
+
+
+def test_kind_of_the_wrong_type_is_a_field_error():
+    """Found by the fuzzing: kind = [] used to be an internal error (unhashable list)."""
+    from prs_geom.model.io import loads_toml
+    for text in ('kind = []\n', 'kind = 3\n', 'kind = {a = 1}\n'):
+        with pytest.raises(DesignError, match=r"^kind = .*: must be one of"):
+            loads_toml(text)

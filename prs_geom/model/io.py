@@ -162,7 +162,7 @@ def design_from_dict(data: dict[str, Any], kinds: dict[str, type] | None = None)
     if "format_version" in data:
         check_format_version(data.pop("format_version"))
     kind = data.pop("kind", "prs")
-    if kind not in kinds:
+    if not isinstance(kind, str) or kind not in kinds:
         raise DesignError("kind", kind, "must be one of " + ", ".join(f'"{k}"' for k in kinds))
     return build_section(kinds[kind], data, "")
 
