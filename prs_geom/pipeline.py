@@ -243,7 +243,7 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
-    write_xlsx(sheets, ctx.add_file("machining.xlsx"))
+    write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, time.strftime("%Y-%m-%d"))
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)

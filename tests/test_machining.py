@@ -37,11 +37,19 @@ def test_grinding_only_removes_material_and_lands_on_design():
             shift = row["axial_shift_um"] * 1e-3
             # lower flanks can only move +z, upper flanks only -z
             assert shift >= 0 if side < 0 else shift <= 0
-            # base flank (thick base tooth) + shift = designed flank position
-            base_flank = row["base_position_mm"] + side * (t + 0.5 * stock)
-            designed_flank = np.sum(pl[:j]) + side * t
-            assert base_flank + shift == pytest.approx(designed_flank, abs=1e-12)
-            assert row["inspection_position_mm"] == pytest.approx(designed_flank + t, abs=1e-12)
+            # independent: the designed flank from the pitch list and the profile's half-width,
+            # the base flank from the thick base tooth (mid-plane (j-1) p_b + stock/2)
+            designed_flank = np.sum(pl[:j]) + side * t + t
+            base_flank = j * pl.min() + 0.5 * stock + side * (t + 0.5 * stock) + t
+            assert row["designed_position_mm"] == pytest.approx(designed_flank, abs=1e-12)
+            assert row["base_position_mm"] == pytest.approx(base_flank, abs=1e-12)
+            # the sheet identity a shop checks, on the numbers as written
+            assert abs(row["base_position_mm"] + row["axial_shift_um"] / 1000 - row["designed_position_mm"]) < 1e-12
+            assert row["inspection_position_mm"] == row["designed_position_mm"]
+            assert row["lead_deviation_um"] == pytest.approx((np.sum(pl[:j]) - j * d.thread.pitch_mm) * 1e3, abs=1e-9)
+            assert row["base_tooth_thickness_mm"] - row["tooth_thickness_mm"] == pytest.approx(stock, abs=1e-12)
+            assert row["tolerance_um"] is None
+        assert "not synthesised" in sh.header["tolerance"]
         # datums: tooth 1 lower and tooth n upper flanks are not worked
         assert sh.rows[0]["axial_shift_um"] == 0 and sh.rows[-1]["axial_shift_um"] == 0
         assert sh.rows[0]["worked"] is False and sh.rows[2]["worked"] is True
@@ -103,3 +111,46 @@ def test_xlsx_is_formatted_for_printing(built):
     assert ws.page_setup.fitToWidth == 1
     assert ws.print_title_rows is not None
     assert ws.freeze_panes is not None
+
+
+def test_tolerances_of_the_design_reach_the_sheet():
+    """Per-flank tolerances written by a synthesis (the [tolerances] lists) are printed per
+    loaded flank with their source; the nut's unloaded lower flank has none."""
+    from dataclasses import replace as _replace
+
+    from prs_geom.model.design import Tolerances
+    d = load_design(EXAMPLES / "graded-pitch.toml")
+    n = d.thread.engaged_teeth
+    tol = Tolerances(roller_screw_flank_um=tuple(0.3 + 0.01 * j for j in range(n)),
+                     roller_nut_flank_um=(0.4,) * n, nut_flank_um=tuple(0.5 + 0.02 * j for j in range(n)),
+                     screw_flank_um=(0.6,) * n, source="synthesised by a test", target_ldc=1.2, confidence=0.95)
+    sheets = machining_sheets(_replace(d, tolerances=tol))
+    for row in sheets["roller"].rows:
+        j = row["tooth"] - 1
+        want = tol.roller_screw_flank_um[j] if row["flank"] == "upper" else tol.roller_nut_flank_um[j]
+        assert row["tolerance_um"] == want
+    for row in sheets["nut"].rows:
+        j = row["tooth"] - 1
+        assert row["tolerance_um"] == (tol.nut_flank_um[j] if row["flank"] == "upper" else None)
+    h = sheets["nut"].header["tolerance"]
+    assert "synthesised by a test" in h and "1.2" in h and "0.95" in h
+
+
+def test_xlsx_summary_sheet_and_number_formats(built):
+    from openpyxl import load_workbook
+    d, out, report = built
+    wb = load_workbook(out / "machining.xlsx")
+    assert wb.sheetnames == ["summary", "roller", "nut"]
+    s = wb["summary"]
+    assert [c.value for c in s[2]][:3] == ["field", "roller", "nut"]
+    ws = wb["roller"]
+    assert ws.freeze_panes == "A4"                           # only the three title rows stay
+    keys = [c[0] for c in COLUMNS]
+    for c, (key, _, unit) in enumerate(COLUMNS, start=1):
+        cell = ws.cell(row=4, column=c)
+        if unit == "mm":
+            assert cell.number_format == "0.00000"              # 0.01 um
+        elif unit == "um":
+            assert cell.number_format == "0.00"
+    assert ws.cell(row=3, column=1).value == keys[0]
+    assert ws.oddHeader.left.text.startswith(d.name) and "prs_geom" in ws.oddHeader.right.text

@@ -21,8 +21,11 @@ unit contact normal from the contact solver (roller lower flank and nut flanks: 
 contact; roller upper flank: screw-roller contact with the theoretical screw).
 
 Datum: the lower flank of tooth 1 at the pitch diameter, at the reference angle theta = 0
-of the part frame (z = 0 at the loaded end). Inspection value: the axial position of the
-flank at the pitch diameter from the datum, at theta = 0 (mm).
+of the part frame (z = 0 at the loaded end). Every position on the sheet is a flank's axial
+position at the pitch diameter from the datum: designed, and on the base cut; the axial shift
+is their difference (designed = base + shift exactly, to rounding). Inspection value: the
+designed flank position (mm). Per-flank tolerances come from the design's ``[tolerances]``
+(e.g. written by a tolerance synthesis), else "not synthesised". All lengths at 20 degC.
 Loaded flanks (load path of :mod:`prs_geom.loads`): roller upper flank by the screw, roller
 lower flank by the nut; nut upper flank by the roller. The nut's lower flank carries no
 load; grinding it keeps the designed tooth thickness and may be skipped.
@@ -44,13 +47,22 @@ COLUMNS = [
     ("loaded_by", "loaded by", ""),
     ("designed_pitch_mm", "designed pitch to next tooth", "mm"),
     ("base_pitch_mm", "base pitch (first cut)", "mm"),
-    ("designed_position_mm", "designed tooth position from datum", "mm"),
-    ("base_position_mm", "base tooth position from datum", "mm"),
-    ("axial_shift_um", "axial shift to produce", "um"),
+    ("designed_position_mm", "designed flank position from datum", "mm"),
+    ("base_position_mm", "base-cut flank position from datum", "mm"),
+    ("axial_shift_um", "axial shift to produce = designed - base", "um"),
+    ("lead_deviation_um", "cumulative lead deviation of the tooth from p (j - 1)", "um"),
+    ("tooth_thickness_mm", "tooth thickness at pitch dia., designed", "mm"),
+    ("base_tooth_thickness_mm", "tooth thickness at pitch dia., as cut with stock", "mm"),
     ("normal_stock_um", "normal stock to remove at contact", "um"),
+    ("tolerance_um", "flank position tolerance +-", "um"),
     ("worked", "flank worked", ""),
     ("inspection_position_mm", "inspection: flank axial position at pitch dia.", "mm"),
 ]
+#: The flank tolerance list (:class:`~prs_geom.model.design.Tolerances`) of each loaded flank.
+_TOLERANCE_FIELD = {("roller", "upper"): "roller_screw_flank_um", ("roller", "lower"): "roller_nut_flank_um",
+                    ("nut", "upper"): "nut_flank_um"}
+#: Reference temperature of every length on the sheets (ISO 1), degC.
+REFERENCE_TEMPERATURE_C = 20.0
 
 
 @dataclass(frozen=True)
@@ -79,37 +91,60 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     loaded = {"roller": {"lower": "nut", "upper": "screw"}, "nut": {"lower": "-", "upper": "roller"}}[part]
     nz = {"roller": {"lower": normal_axial["nut"], "upper": normal_axial["screw"]},
           "nut": {"lower": normal_axial["nut"], "upper": normal_axial["nut"]}}[part]
+    tol = design.tolerances
+    per_tooth = tol.flank_tolerances_um(n) if tol is not None else None
+    lead_dev = (z - np.arange(n) * design.thread.pitch_mm) * 1e3
     rows = []
     for j in range(n):
         for flank in ("lower", "upper"):
+            # flank positions at the pitch diameter from the datum (lower flank of tooth 1):
+            # designed z_j (+ 2t upper), base cut (j - 1) p_b (+ Delta_n + 2t upper); base is
+            # written as designed - shift so that designed = base + shift / 1000 holds to
+            # rounding (about 1e-15 mm)
             shift = delta[j] if flank == "lower" else delta[j] - delta_n
-            side = -1.0 if flank == "lower" else 1.0
+            designed = float(z[j]) if flank == "lower" else float(z[j] + 2.0 * t)
+            # = (j - 1) p_b (lower), (j - 1) p_b + Delta_n + 2 t (upper); from the shift so that
+            # the shift keeps its exact sign (0 on the datum teeth)
+            base_pos = designed - float(shift)
+            fld = _TOLERANCE_FIELD.get((part, flank))
             rows.append({
                 "tooth": j + 1,
                 "flank": flank,
                 "loaded_by": loaded[flank],
                 "designed_pitch_mm": float(pl[j]) if j < n - 1 else None,
                 "base_pitch_mm": p_b,
-                "designed_position_mm": float(z[j]),
-                "base_position_mm": float(base[j] + 0.5 * delta_n),
-                "axial_shift_um": float(shift * 1e3),
+                "designed_position_mm": designed,
+                "base_position_mm": base_pos,
+                "axial_shift_um": float(shift) * 1e3,
+                "lead_deviation_um": float(lead_dev[j]),
+                "tooth_thickness_mm": 2.0 * t,
+                "base_tooth_thickness_mm": 2.0 * t + delta_n,
                 "normal_stock_um": float(abs(shift) * nz[flank] * 1e3),
+                "tolerance_um": (float(per_tooth[fld][j]) if per_tooth is not None and fld is not None else None),
                 "worked": bool(abs(shift) > 0.0),
-                # lower flank of tooth 1 is the datum: z_j + side t - (-t)
-                "inspection_position_mm": float(z[j] + side * t + t),
+                "inspection_position_mm": designed,
             })
+    if tol is None:
+        tol_text = "not synthesised: the design has no [tolerances] section (prs-geom tolerance --target-ldc ... --out)"
+    else:
+        tol_text = f"per flank from the design's [tolerances]: {tol.source}"
+        if tol.target_ldc is not None:
+            tol_text += f" (target worst LDC {tol.target_ldc:g}, confidence {tol.confidence:g}, seed {tol.seed})"
+    alpha = getattr(design.materials, part).thermal_expansion_per_k
     header = {
         "part": part,
         "design": design.name,
-        "units": "lengths mm, shifts and stock um",
+        "units": "lengths mm, shifts, deviations and stock um; all at 20 degC",
         "datum": "lower flank of tooth 1 at the pitch diameter, reference angle theta = 0 "
-                 "(tooth 1 at the loaded end)",
+                 "(tooth 1 at the loaded end); every position is that flank's axial distance from it",
         "base_pitch_mm": p_b,
         "base_tooth_thickness_stock_um": delta_n * 1e3,
         "pitch_diameter_mm": 2.0 * prof.pitch_radius,
         "flank_half_angle_deg": design.thread.flank_half_angle_deg,
         "teeth": n,
-        "tolerance": "axial flank position +-0.5 um (graded-pitch corrections are sub-um per tooth)",
+        "tolerance": tol_text,
+        "reference_temperature_degC": REFERENCE_TEMPERATURE_C,
+        "thermal_growth_of_engaged_length_um_per_K": float((n - 1) * design.thread.pitch_mm * alpha * 1e3),
         "process": "cut at the base pitch with the thickness stock, then grind lower flanks +z "
                    "(datum tooth 1) and upper flanks -z (datum tooth n)",
         "constant_pitch": bool(np.all(pl == pl[0])),

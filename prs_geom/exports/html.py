@@ -61,7 +61,9 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM) -> dict[
 
 
 
-def _table(rows: list[list[Any]], header: list[str] | None = None) -> str:
+def _table(rows: list[list[Any]], header: list[str] | None = None, full: bool = False) -> str:
+    """An HTML table; floats to 6 significant digits, or in full (shortest round-trip repr,
+    as in the CSV) when ``full``: machining values are read to 0.01 um on 40 mm positions."""
     out = ["<table>"]
     if header:
         out.append("<tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in header) + "</tr>")
@@ -69,7 +71,7 @@ def _table(rows: list[list[Any]], header: list[str] | None = None) -> str:
         cells = []
         for i, v in enumerate(r):
             if isinstance(v, float):
-                v = f"{v:.6g}"
+                v = repr(v) if full else f"{v:.6g}"
             cls = ' class="k"' if i == 0 else ""
             cells.append(f"<td{cls}>{html.escape(str(v))}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
@@ -183,7 +185,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
         parts.append(f"<h2>Machining sheet: {html.escape(part)}</h2>")
         parts.append(_table([[k, v] for k, v in sheet.header.items()]))
         parts.append(_table([[r[k] if r[k] is not None else "" for k, _, _ in COLUMNS] for r in sheet.rows],
-                            [f"{t} ({u})" if u else t for _, t, u in COLUMNS]))
+                            [f"{t} ({u})" if u else t for _, t, u in COLUMNS], full=True))
     parts.append("<h2>Design</h2>" + _table(_flatten(design_to_dict(design)), ["field", "value"]))
     if mesh_checks is not None:
         parts.append("<h2>Mesh checks</h2>" + _table(

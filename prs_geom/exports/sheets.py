@@ -3,9 +3,10 @@
 CSV: ``#``-prefixed header lines (part, design, units, datum, ...), then one header row of
 column keys and one row per tooth and flank. Numbers are written with Python's shortest
 round-trip representation, so a reader gets back exactly the values in report.json.
-XLSX (openpyxl): the same header and table (numbers to about 16 significant digits, the
-precision of the format), formatted for printing (landscape, fit to one
-page wide, title rows repeated on every page, units in the column titles).
+XLSX (openpyxl): a summary sheet with every part's header, then one table per part (numbers
+to about 16 significant digits, the precision of the format; shown to 0.01 um), formatted
+for printing (A4 landscape, fit to one page wide, title rows repeated on every page, units in
+the column titles, page header with design, part, date and version).
 """
 from __future__ import annotations
 
@@ -51,56 +52,79 @@ def read_sheet_csv(text: str) -> tuple[dict[str, str], list[dict[str, str]]]:
     return header, list(csv.DictReader(body))
 
 
-def write_xlsx(sheets: dict[str, MachiningSheet], path: Path) -> None:
+def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "", date: str = "") -> None:
+    """The workbook: a ``summary`` sheet (the header of every part side by side), then one
+    sheet per part holding only the table (title row, column titles with units, column keys,
+    one row per flank), frozen below the keys. Numbers keep full float64 precision; the
+    display format rounds mm to 0.00001 (0.01 um) and um to 0.01. Print setup: A4
+    landscape, fit to one page wide, title rows repeated, page header with design, part,
+    date and version."""
     from openpyxl import Workbook
     from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
     from openpyxl.utils import get_column_letter
 
     wb = Workbook()
-    wb.remove(wb.active)
+    summary = wb.active
+    summary.title = "summary"
     thin = Side(style="thin", color="999999")
+    parts = list(sheets)
+    design = next(iter(sheets.values())).header["design"] if sheets else ""
+    summary.append([f"Pitch-modification machining sheets of design '{design}'"])
+    summary["A1"].font = Font(bold=True, size=13)
+    summary.append(["field"] + parts)
+    for c in range(1, len(parts) + 2):
+        summary.cell(row=2, column=c).font = Font(bold=True)
+    keys = list(dict.fromkeys(k for sh in sheets.values() for k in sh.header))
+    for k in keys:
+        summary.append([k] + [sheets[p].header.get(k) for p in parts])
+    summary.column_dimensions["A"].width = max(len(k) for k in keys) + 2 if keys else 20
+    for c in range(2, len(parts) + 2):
+        summary.column_dimensions[get_column_letter(c)].width = 60
+        for r in range(3, len(keys) + 3):
+            summary.cell(row=r, column=c).alignment = Alignment(wrap_text=True, vertical="top")
+    _print_setup(summary, design, "summary", version, date)
     for part, sheet in sheets.items():
         ws = wb.create_sheet(part)
-        ws.append([f"Pitch-modification machining sheet: {part} of design '{sheet.header['design']}'"])
-        ws["A1"].font = Font(bold=True, size=13)
-        r = 2
-        for k, v in sheet.header.items():
-            ws.cell(row=r, column=1, value=k).font = Font(bold=True)
-            ws.cell(row=r, column=2, value=v)
-            r += 1
-        r += 1
-        title_row = r
+        ws.append([f"Machining sheet: {part} of design '{sheet.header['design']}' "
+                   f"(datum, process and tolerances on the summary sheet)"])
+        ws["A1"].font = Font(bold=True, size=12)
+        title_row, key_row = 2, 3
         for c, (key, title, unit) in enumerate(COLUMNS, start=1):
-            cell = ws.cell(row=r, column=c, value=f"{title} ({unit})" if unit else title)
+            cell = ws.cell(row=title_row, column=c, value=f"{title} ({unit})" if unit else title)
             cell.font = Font(bold=True)
             cell.alignment = Alignment(wrap_text=True, vertical="top")
             cell.fill = PatternFill("solid", fgColor="DDE6F0")
             cell.border = Border(top=thin, bottom=thin, left=thin, right=thin)
-        key_row = r + 1
-        for c, (key, _, _) in enumerate(COLUMNS, start=1):
             ws.cell(row=key_row, column=c, value=key).font = Font(italic=True, color="777777", size=8)
         for i, row in enumerate(sheet.rows):
             for c, (key, _, unit) in enumerate(COLUMNS, start=1):
                 v = row[key]
-                cell = ws.cell(row=key_row + 1 + i, column=c, value=("yes" if v else "no") if isinstance(v, bool) else v)
+                cell = ws.cell(row=key_row + 1 + i, column=c,
+                               value=("yes" if v else "no") if isinstance(v, bool) else v)
                 if unit == "mm":
-                    cell.number_format = "0.0000000"
+                    cell.number_format = "0.00000"
                 elif unit == "um":
-                    cell.number_format = "0.0000"
+                    cell.number_format = "0.00"
                 cell.border = Border(bottom=Side(style="hair", color="CCCCCC"))
-        for c in range(1, len(COLUMNS) + 1):
-            ws.column_dimensions[get_column_letter(c)].width = 16 if c > 3 else 10
-        ws.row_dimensions[title_row].height = 45
+        for c, (key, title, unit) in enumerate(COLUMNS, start=1):
+            # wide enough for the key and the longest displayed number; titles wrap
+            ws.column_dimensions[get_column_letter(c)].width = max(len(key) + 2, 12)
+        ws.row_dimensions[title_row].height = 60
         ws.freeze_panes = ws.cell(row=key_row + 1, column=1)
         ws.print_title_rows = f"{title_row}:{key_row}"
-        ws.page_setup.orientation = "landscape"
-        ws.page_setup.paperSize = ws.PAPERSIZE_A4
-        ws.page_setup.fitToWidth = 1
-        ws.page_setup.fitToHeight = 0
-        ws.sheet_properties.pageSetUpPr.fitToPage = True
-        ws.oddHeader.center.text = f"{sheet.header['design']} - {part}"
-        ws.oddFooter.center.text = "page &P of &N"
+        _print_setup(ws, sheet.header["design"], part, version, date)
     wb.save(path)
+
+
+def _print_setup(ws, design: str, part: str, version: str, date: str) -> None:
+    ws.page_setup.orientation = "landscape"
+    ws.page_setup.paperSize = ws.PAPERSIZE_A4
+    ws.page_setup.fitToWidth = 1
+    ws.page_setup.fitToHeight = 0
+    ws.sheet_properties.pageSetUpPr.fitToPage = True
+    ws.oddHeader.left.text = f"{design} - {part}"
+    ws.oddHeader.right.text = " ".join(x for x in (date, f"prs_geom {version}" if version else "") if x)
+    ws.oddFooter.center.text = "page &P of &N"
 
 
 def read_xlsx(path: Path) -> dict[str, list[dict[str, object]]]:
@@ -112,6 +136,8 @@ def read_xlsx(path: Path) -> dict[str, list[dict[str, object]]]:
     keys = [c[0] for c in COLUMNS]
     for ws in wb.worksheets:
         rows = list(ws.iter_rows(values_only=True))
-        k = next(i for i, r in enumerate(rows) if r and list(r[:len(keys)]) == keys)
+        k = next((i for i, r in enumerate(rows) if r and list(r[:len(keys)]) == keys), None)
+        if k is None:                       # the summary sheet
+            continue
         out[ws.title] = [dict(zip(keys, r[:len(keys)])) for r in rows[k + 1:] if r and r[0] is not None]
     return out
