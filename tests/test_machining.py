@@ -39,8 +39,11 @@ def test_grinding_only_removes_material_and_lands_on_design():
             assert shift >= 0 if side < 0 else shift <= 0
             # independent: the designed flank from the pitch list and the profile's half-width,
             # the base flank from the thick base tooth (mid-plane (j-1) p_b + stock/2)
-            designed_flank = np.sum(pl[:j]) + side * t + t
-            base_flank = j * pl.min() + 0.5 * stock + side * (t + 0.5 * stock) + t
+            # datum A = the end face: tooth 1's mid-plane at p/2 (roller) or 0 (nut) from it
+            mid1 = 0.5 * d.thread.pitch_mm if part == "roller" else 0.0
+            designed_flank = mid1 + np.sum(pl[:j]) + side * t
+            base_flank = mid1 + j * pl.min() + 0.5 * stock + side * (t + 0.5 * stock)
+            assert row["on_part"] == (0 <= designed_flank <= d.thread.engaged_teeth * d.thread.pitch_mm)
             assert row["designed_position_mm"] == pytest.approx(designed_flank, abs=1e-12)
             assert row["base_position_mm"] == pytest.approx(base_flank, abs=1e-12)
             # the sheet identity a shop checks, on the numbers as written
@@ -154,3 +157,38 @@ def test_xlsx_summary_sheet_and_number_formats(built):
             assert cell.number_format == "0.00"
     assert ws.cell(row=3, column=1).value == keys[0]
     assert ws.oddHeader.left.text.startswith(d.name) and "prs_geom" in ws.oddHeader.right.text
+
+
+def test_sheet_flanks_and_datum_exist_on_the_meshed_parts():
+    """Independent reader: the meshed parts (part frames) cut by the line theta = 0 at the
+    pitch radius. Every flank the sheet says is on the part is a mesh crossing within the
+    mesh tolerance, the first crossing after datum A (the end face z = 0) is the first flank
+    the sheet marks on the part, and the flanks marked off the part are not there."""
+    import trimesh
+
+    from prs_geom.pipeline import build_meshes
+    d = load_design(EXAMPLES / "graded-pitch.toml")
+    sheets = machining_sheets(d)
+    meshes = build_meshes(d)
+    tol = 0.03                                   # chord 0.01 mm on a 45 deg flank, plus the helix
+    for part in ("roller", "nut"):
+        mesh = meshes[part]
+        r = getattr(ThreadProfiles.from_design(d), part).pitch_radius
+        # the section by the plane y = 0 (segments), crossed by the line x = r, x > 0
+        seg = trimesh.intersections.mesh_plane(mesh, [0.0, 1.0, 0.0], [0.0, 0.0, 0.0])
+        x1, x2, z1, z2 = seg[:, 0, 0], seg[:, 1, 0], seg[:, 0, 2], seg[:, 1, 2]
+        cross = (x1 - r) * (x2 - r) < 0
+        u = (r - x1[cross]) / (x2[cross] - x1[cross])
+        z = np.unique(np.round(np.sort(z1[cross] + u * (z2[cross] - z1[cross])), 9))
+        rows = sheets[part].rows
+        on = [row["designed_position_mm"] for row in rows if row["on_part"]]
+        off = [row["designed_position_mm"] for row in rows if not row["on_part"]]
+        for pos in on:
+            assert np.min(np.abs(z - pos)) < tol, (part, pos)
+        for pos in off:
+            assert np.min(np.abs(z - pos)) > 0.2, (part, pos)
+        inside = z[z > 1e-6]
+        assert abs(inside[0] - min(on)) < tol           # the datum tooth's flank is the first one
+        assert abs(mesh.bounds[0][2]) < 1e-9            # datum A: the end face z = 0 bounds the part
+        if part == "nut":                                # ... and at the pitch radius it is material
+            assert np.min(np.abs(z)) < 1e-6

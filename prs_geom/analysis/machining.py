@@ -20,9 +20,11 @@ Normal stock at the contact point = |axial shift| * |n_z|, n_z the axial compone
 unit contact normal from the contact solver (roller lower flank and nut flanks: roller-nut
 contact; roller upper flank: screw-roller contact with the theoretical screw).
 
-Datum: the lower flank of tooth 1 at the pitch diameter, at the reference angle theta = 0
-of the part frame (z = 0 at the loaded end). Every position on the sheet is a flank's axial
-position at the pitch diameter from the datum: designed, and on the base cut; the axial shift
+Datums: A, the loaded-side end face (z = 0 of the part frame, a physical face of both
+parts), and B, the angular reference mark at theta = 0. Every position on the sheet is a
+flank's axial position at the pitch diameter, at theta = 0, from A: designed, and on the base
+cut (tooth 1's mid-plane lies p/2 from A on the roller and on A on the nut, so the nut's
+tooth 1 lower flank is not on the part there: ``on_part`` marks it); the axial shift
 is their difference (designed = base + shift exactly, to rounding). Inspection value: the
 designed flank position (mm). Per-flank tolerances come from the design's ``[tolerances]``
 (e.g. written by a tolerance synthesis), else "not synthesised". All lengths at 20 degC.
@@ -56,6 +58,7 @@ COLUMNS = [
     ("normal_stock_um", "normal stock to remove at contact", "um"),
     ("tolerance_um", "flank position tolerance +-", "um"),
     ("worked", "flank worked", ""),
+    ("on_part", "flank on the part at theta = 0 (no: partial end tooth)", ""),
     ("inspection_position_mm", "inspection: flank axial position at pitch dia.", "mm"),
 ]
 #: The flank tolerance list (:class:`~prs_geom.model.design.Tolerances`) of each loaded flank.
@@ -91,6 +94,10 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     loaded = {"roller": {"lower": "nut", "upper": "screw"}, "nut": {"lower": "-", "upper": "roller"}}[part]
     nz = {"roller": {"lower": normal_axial["nut"], "upper": normal_axial["screw"]},
           "nut": {"lower": normal_axial["nut"], "upper": normal_axial["nut"]}}[part]
+    # datum A: the loaded-side end face (part z = 0); tooth 1's mid-plane at theta = 0 lies
+    # p/2 inside it on the roller and on it on the nut (docs/theory/conventions.md)
+    mid1 = 0.5 * design.thread.pitch_mm if part == "roller" else 0.0
+    length = n * design.thread.pitch_mm
     tol = design.tolerances
     per_tooth = tol.flank_tolerances_um(n) if tol is not None else None
     lead_dev = (z - np.arange(n) * design.thread.pitch_mm) * 1e3
@@ -102,7 +109,7 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
             # written as designed - shift so that designed = base + shift / 1000 holds to
             # rounding (about 1e-15 mm)
             shift = delta[j] if flank == "lower" else delta[j] - delta_n
-            designed = float(z[j]) if flank == "lower" else float(z[j] + 2.0 * t)
+            designed = float(mid1 + z[j] - t) if flank == "lower" else float(mid1 + z[j] + t)
             # = (j - 1) p_b (lower), (j - 1) p_b + Delta_n + 2 t (upper); from the shift so that
             # the shift keeps its exact sign (0 on the datum teeth)
             base_pos = designed - float(shift)
@@ -122,6 +129,8 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
                 "normal_stock_um": float(abs(shift) * nz[flank] * 1e3),
                 "tolerance_um": (float(per_tooth[fld][j]) if per_tooth is not None and fld is not None else None),
                 "worked": bool(abs(shift) > 0.0),
+                # a flank of a partial end tooth (cut by the end face at theta = 0)
+                "on_part": bool(-1e-12 <= designed <= length + 1e-12),
                 "inspection_position_mm": designed,
             })
     if tol is None:
@@ -135,8 +144,9 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
         "part": part,
         "design": design.name,
         "units": "lengths mm, shifts, deviations and stock um; all at 20 degC",
-        "datum": "lower flank of tooth 1 at the pitch diameter, reference angle theta = 0 "
-                 "(tooth 1 at the loaded end); every position is that flank's axial distance from it",
+        "datum": "A: the loaded-side end face (tooth 1 end, z = 0 of the part frame); B: the angular "
+                 "reference mark at theta = 0; every position is the flank's axial distance from A at the "
+                 "pitch diameter, at theta = 0",
         "base_pitch_mm": p_b,
         "base_tooth_thickness_stock_um": delta_n * 1e3,
         "pitch_diameter_mm": 2.0 * prof.pitch_radius,
