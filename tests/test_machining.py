@@ -192,3 +192,25 @@ def test_sheet_flanks_and_datum_exist_on_the_meshed_parts():
         assert abs(mesh.bounds[0][2]) < 1e-9            # datum A: the end face z = 0 bounds the part
         if part == "nut":                                # ... and at the pitch radius it is material
             assert np.min(np.abs(z)) < 1e-6
+
+
+def test_start_table_of_the_multi_start_nut():
+    """Independent check: the teeth of start k at theta = 0 are k, k + N, ...; the start's
+    lead is the sum of N consecutive designed pitches; the angular index splits the turn."""
+    d = load_design(EXAMPLES / "graded-pitch.toml")
+    sheets = machining_sheets(d)
+    N = d.nut.starts
+    pl = np.array(d.pitch_list("nut"))
+    starts = sheets["nut"].starts
+    assert [s["start"] for s in starts] == list(range(1, N + 1))
+    assert [s["angular_index_deg"] for s in starts] == [360.0 * k / N for k in range(N)]
+    for k, s in enumerate(starts):
+        assert s["teeth_at_theta_0"][:2] == [k + 1, k + 1 + N]
+        assert s["axial_offset_mm"] == pytest.approx(np.sum(pl[:k]), abs=1e-15)
+        leads = [np.sum(pl[j - 1:j - 1 + N]) for j in s["teeth_at_theta_0"] if j - 1 + N <= len(pl)]
+        assert s["lead_min_mm"] == pytest.approx(min(leads), abs=1e-14)
+        assert s["lead_max_mm"] == pytest.approx(max(leads), abs=1e-14)
+        assert s["nominal_lead_mm"] == N * d.thread.pitch_mm
+    assert sorted(t for s in starts for t in s["teeth_at_theta_0"]) == list(range(1, d.thread.engaged_teeth + 1))
+    assert sheets["roller"].starts[0]["teeth_at_theta_0"] == list(range(1, d.thread.engaged_teeth + 1))
+    assert "index the part by +360/N" in sheets["nut"].header["indexing"]

@@ -70,12 +70,52 @@ REFERENCE_TEMPERATURE_C = 20.0
 
 @dataclass(frozen=True)
 class MachiningSheet:
+    """One part's sheet: ``header`` (datum, process, tolerances, ...), ``rows`` (one per
+    tooth and flank, :data:`COLUMNS`) and ``starts`` (one per thread start, :func:`start_table`)."""
+
     part: str
     header: dict[str, Any]
     rows: list[dict[str, Any]]
+    starts: list[dict[str, Any]]
 
     def as_dict(self) -> dict[str, Any]:
-        return {"part": self.part, "header": self.header, "rows": self.rows}
+        return {"part": self.part, "header": self.header, "rows": self.rows, "starts": self.starts}
+
+
+def start_table(design: PRSDesign, part: str) -> list[dict[str, Any]]:
+    """The thread starts of ``part`` as a shop sets them up (docs/theory/manufacturing.md).
+
+    Start k (1-based) begins at angular index (k - 1) 360 / N deg from mark B, turning with
+    the thread's hand, which puts its first tooth (k - 1) p further from A along the axis
+    at theta = 0. Along a start the teeth at theta = 0 are k, k + N, k + 2N, ...; its lead
+    is the axial advance per turn, N p nominal, and on a graded part the sum of the N
+    designed pitches between two successive teeth of the start (smallest and largest given)."""
+    starts = {"roller": 1, "nut": design.nut.starts, "screw": design.screw.starts}[part]
+    p = design.thread.pitch_mm
+    pl = np.asarray(design.pitch_list(part), dtype=np.float64)
+    n = len(pl) + 1
+    z = np.concatenate([[0.0], np.cumsum(pl)])
+    out = []
+    for k in range(starts):
+        teeth = list(range(k + 1, n + 1, starts))
+        leads = [float(z[j - 1 + starts] - z[j - 1]) for j in teeth if j - 1 + starts < n]
+        out.append({
+            "start": k + 1,
+            "angular_index_deg": 360.0 * k / starts,
+            "axial_offset_mm": float(z[k]) if k < n else k * p,
+            "nominal_lead_mm": starts * p,
+            "lead_min_mm": min(leads) if leads else starts * p,
+            "lead_max_mm": max(leads) if leads else starts * p,
+            "teeth_at_theta_0": teeth,
+        })
+    return out
+
+
+#: How a shop indexes between the starts of a multi-start part (the sheet header).
+INDEXING = ("grind start 1 over the engaged length; then for each next start index the part by "
+            "+360/N deg about its axis (the thread's hand) with the wheel at the same axial setting, "
+            "check the start's first flank from datum A against the sheet, and grind it; the lower "
+            "flanks of all starts first, then the upper flanks")
 
 
 def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]) -> MachiningSheet:
@@ -158,8 +198,10 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
         "process": "cut at the base pitch with the thickness stock, then grind lower flanks +z "
                    "(datum tooth 1) and upper flanks -z (datum tooth n)",
         "constant_pitch": bool(np.all(pl == pl[0])),
+        "thread_starts": {"roller": 1, "nut": design.nut.starts}[part],
+        "indexing": INDEXING if part == "nut" and design.nut.starts > 1 else "single start",
     }
-    return MachiningSheet(part, header, rows)
+    return MachiningSheet(part, header, rows, start_table(design, part))
 
 
 def machining_sheets(design: PRSDesign, contact: ContactResult | None = None) -> dict[str, MachiningSheet]:

@@ -184,6 +184,11 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     for part, sheet in (machining or {}).items():
         parts.append(f"<h2>Machining sheet: {html.escape(part)}</h2>")
         parts.append(_table([[k, v] for k, v in sheet.header.items()]))
+        parts.append(_table([[st["start"], st["angular_index_deg"], st["axial_offset_mm"], st["nominal_lead_mm"],
+                              st["lead_min_mm"], st["lead_max_mm"], " ".join(map(str, st["teeth_at_theta_0"]))]
+                             for st in sheet.starts],
+                            ["start", "angular index (deg)", "axial offset (mm)", "nominal lead (mm)",
+                             "lead min (mm)", "lead max (mm)", "teeth at theta = 0"], full=True))
         parts.append(_table([[r[k] if r[k] is not None else "" for k, _, _ in COLUMNS] for r in sheet.rows],
                             [f"{t} ({u})" if u else t for _, t, u in COLUMNS], full=True))
     parts.append("<h2>Design</h2>" + _table(_flatten(design_to_dict(design)), ["field", "value"]))

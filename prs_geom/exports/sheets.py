@@ -31,6 +31,10 @@ def sheet_csv(sheet: MachiningSheet) -> str:
     buf = io.StringIO()
     for k, v in sheet.header.items():
         buf.write(f"# {k}: {_cell(v)}\n")
+    for st in sheet.starts:
+        buf.write(f"# start {st['start']}: " + ", ".join(
+            f"{k} {_cell(v) if not isinstance(v, list) else ' '.join(map(str, v))}"
+            for k, v in st.items() if k != "start") + "\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([c[0] for c in COLUMNS])
     for row in sheet.rows:
@@ -77,6 +81,21 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     keys = list(dict.fromkeys(k for sh in sheets.values() for k in sh.header))
     for k in keys:
         summary.append([k] + [sheets[p].header.get(k) for p in parts])
+    r0 = len(keys) + 4
+    summary.cell(row=r0, column=1, value="thread starts").font = Font(bold=True)
+    r0 += 1
+    skeys = ["part", "start", "angular_index_deg", "axial_offset_mm", "nominal_lead_mm", "lead_min_mm",
+             "lead_max_mm", "teeth_at_theta_0"]
+    for c, k in enumerate(skeys, start=1):
+        summary.cell(row=r0, column=c, value=k).font = Font(bold=True)
+    for p_ in parts:
+        for st in sheets[p_].starts:
+            r0 += 1
+            for c, k in enumerate(skeys, start=1):
+                v = p_ if k == "part" else st[k]
+                cell = summary.cell(row=r0, column=c, value=" ".join(map(str, v)) if isinstance(v, list) else v)
+                if k.endswith("_mm"):
+                    cell.number_format = "0.00000"
     summary.column_dimensions["A"].width = max(len(k) for k in keys) + 2 if keys else 20
     for c in range(2, len(parts) + 2):
         summary.column_dimensions[get_column_letter(c)].width = 60
