@@ -437,7 +437,19 @@ def corrected_screw_profile(design: PRSDesign, pitch_radius: float) -> ThreadPro
 
 def theoretical_screw(design: PRSDesign, max_iter: int = 30) -> TheoreticalScrew:
     """Screw pitch diameter giving the design clearance at the screw-roller contact
-    (secant iteration on the pitch radius, centre distance fixed)."""
+    (secant iteration on the pitch radius, centre distance fixed).
+
+    The diameter is a property of the thread forms and the centre distance, not of the
+    grading: it is computed on the design without its pitch lists, where every tooth of every
+    roller meets the screw alike (roller 0's middle tooth stands for all). The graded teeth
+    sit micrometres off those positions axially; the roller's axial float and the load model's
+    gaps take that, and a diameter taken from one graded tooth would instead carry that tooth's
+    cumulative shift into the screw (5.7 um on the default equal-load design).
+    docs/theory/contact.md, "The theoretical diameter of a graded design"."""
+    if design.graded:
+        from dataclasses import replace as _replace
+        design = design.with_changes(roller=_replace(design.roller, pitch_list_mm=None),
+                                     nut=_replace(design.nut, pitch_list_mm=None))
     target = design.contact.clearance_mm
     prec = design.contact.precision_mm
     r0 = 0.5 * design.screw.pitch_diameter_mm
