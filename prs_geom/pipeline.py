@@ -233,13 +233,29 @@ def stage_checks(ctx: BuildContext) -> None:
     ctx.report["warnings"] += check_warnings(ctx.report)
 
 
+def _drawing_date() -> str:
+    """Date of the drawing title blocks: SOURCE_DATE_EPOCH when set (reproducible builds, the
+    goldens), else today (UTC)."""
+    import os
+    from datetime import datetime, timezone
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    when = datetime.fromtimestamp(int(epoch), timezone.utc) if epoch else datetime.now(timezone.utc)
+    return when.date().isoformat()
+
+
 def stage_manufacturing(ctx: BuildContext) -> None:
-    """Machining sheets (CSV per part, one XLSX) and the DXF profile drawing."""
+    """Inspection values, machining sheets (CSV per part, one XLSX), the DXF profiles and the
+    per-part drawings (DXF and one PDF)."""
     from prs_geom.analysis.machining import machining_sheets
     from prs_geom.exports.dxf import write_dxf
     from prs_geom.exports.sheets import sheet_csv, write_xlsx
 
-    ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact)
+    from prs_geom.analysis.inspection import inspection, inspection_report
+
+    insp = inspection_report(inspection(ctx.design, ctx.contact))
+    ctx.report["inspection"] = insp
+    ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact, insp)
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
@@ -247,6 +263,9 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
+    from prs_geom.exports.drawing import write_drawings
+
+    ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _drawing_date(), __version__)
 
 
 def stage_html(ctx: BuildContext) -> None:

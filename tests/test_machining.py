@@ -214,3 +214,14 @@ def test_start_table_of_the_multi_start_nut():
     assert sorted(t for s in starts for t in s["teeth_at_theta_0"]) == list(range(1, d.thread.engaged_teeth + 1))
     assert sheets["roller"].starts[0]["teeth_at_theta_0"] == list(range(1, d.thread.engaged_teeth + 1))
     assert "index the part by +360/N" in sheets["nut"].header["indexing"]
+
+
+def test_build_reports_inspection_and_sheets_carry_it(built):
+    d, out, report = built
+    insp = report["inspection"]
+    assert set(insp) == {"screw", "roller", "nut"}
+    for part, rep in insp.items():
+        assert abs(rep["numerical_check_um"]) < 0.1 and rep["check_passed"]
+    for part in ("roller", "nut"):
+        header, _ = read_sheet_csv((out / f"machining_{part}.csv").read_text())
+        assert f"M = {insp[part]['measurement_mm']:.6f} mm" in header["inspection"]

@@ -204,10 +204,21 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     return MachiningSheet(part, header, rows, start_table(design, part))
 
 
-def machining_sheets(design: PRSDesign, contact: ContactResult | None = None) -> dict[str, MachiningSheet]:
+def machining_sheets(design: PRSDesign, contact: ContactResult | None = None,
+                     inspection: dict[str, dict[str, Any]] | None = None) -> dict[str, MachiningSheet]:
     """Sheets of roller and nut, with the contact normals of the contact stage (solved here
-    when ``contact`` is not given)."""
+    when ``contact`` is not given). ``inspection``: the per-part reports of
+    :func:`prs_geom.analysis.inspection.inspection_report`, whose over-wire / over-ball
+    values go into each sheet's header."""
     contact = contact if contact is not None else analyse_contact(design)
     nz = {"screw": abs(contact.screw_roller["upper_at_theoretical"].normal[2]),
           "nut": abs(contact.roller_nut["lower"].normal[2])}
-    return {part: machining_sheet(design, part, nz) for part in ("roller", "nut")}
+    sheets = {part: machining_sheet(design, part, nz) for part in ("roller", "nut")}
+    for part, sh in sheets.items():
+        rep = (inspection or {}).get(part)
+        if rep is not None:
+            sh.header["inspection"] = (
+                f"{rep['gauge']} diameter {rep['gauge_diameter_mm']:.6f} mm, measurement M = "
+                f"{rep['measurement_mm']:.6f} mm at 20 degC ({rep['temperature_coefficient_um_per_k']:.3f} um/K); "
+                f"{rep['method']}")
+    return sheets

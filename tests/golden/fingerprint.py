@@ -6,7 +6,8 @@ A *fingerprint* of an output folder holds
   ``time_s``), compared number by number to 1e-12 relative;
 * ``files``: the SHA-256 of every exported file's bytes, less what is not content:
   DXF creation/update dates and GUIDs, the XLSX (a zip with dates inside) is replaced by its
-  cell values, the manifest (which holds the write time) is left out.
+  cell values, the manifest (which holds the write time) is left out. Builds run with
+  SOURCE_DATE_EPOCH fixed, so the drawing title blocks carry the same date.
 
 Regenerate the goldens (after a change that alters outputs on purpose, in its own commit
 with the reason) with::
@@ -97,6 +98,17 @@ def build_fingerprint(key: str, out: Path) -> dict[str, Any]:
     from prs_geom.pipeline import build
     from prs_geom.pipeline import load_any_design as load_design
 
+    import os
+
     design = default_design() if DESIGNS[key] is None else load_design(EXAMPLES / DESIGNS[key])
-    build(design, out, memory_budget=8 * 2 ** 30)
+    # the drawings print a date in their title blocks: a fixed one (2026-01-01) for the goldens
+    saved = os.environ.get("SOURCE_DATE_EPOCH")
+    os.environ["SOURCE_DATE_EPOCH"] = "1767225600"
+    try:
+        build(design, out, memory_budget=8 * 2 ** 30)
+    finally:
+        if saved is None:
+            del os.environ["SOURCE_DATE_EPOCH"]
+        else:
+            os.environ["SOURCE_DATE_EPOCH"] = saved
     return fingerprint(out)

@@ -1,0 +1,185 @@
+"""Per-part engineering drawings (DXF + PDF) read back with ezdxf, an independent reader."""
+import math
+import re
+import shutil
+import subprocess
+from datetime import datetime
+
+import ezdxf
+import numpy as np
+import pytest
+from ezdxf import bbox
+from ezdxf.tools import juliandate
+
+from prs_geom.analysis.contact import analyse_contact
+from prs_geom.exports.drawing import PARTS, design_hash, write_drawings
+from prs_geom.model.design import Nut, PRSDesign, Roller
+
+PL_R = tuple(2.0 + 4e-4 * (19 - j) / 19 + 1e-4 * math.sin(j) for j in range(19))
+PL_N = tuple(2.0 + 6e-4 * (19 - j) / 19 + 2e-4 * math.cos(j) for j in range(19))
+DATE = "2026-01-02"
+VERSION = "9.8.7-test"
+
+
+@pytest.fixture(scope="module")
+def drawings(tmp_path_factory):
+    d = PRSDesign(name="drawtest", roller=Roller(pitch_list_mm=PL_R), nut=Nut(pitch_list_mm=PL_N))
+    contact = analyse_contact(d)
+    out = tmp_path_factory.mktemp("drawings")
+    names = write_drawings(d, contact, out, DATE, VERSION)
+    docs = {part: ezdxf.readfile(out / f"drawing_{part}.dxf") for part in PARTS}
+    return d, contact, out, names, docs
+
+
+def _dims(doc):
+    return {e.dxf.text: e for e in doc.modelspace() if e.dxftype() == "DIMENSION"}
+
+
+def test_files_header_layers_and_audit(drawings):
+    d, _, out, names, docs = drawings
+    assert names == ["drawing_screw.dxf", "drawing_roller.dxf", "drawing_nut.dxf", "drawings.pdf"]
+    for part, doc in docs.items():
+        assert doc.dxfversion == "AC1024"                     # R2010
+        assert doc.header["$INSUNITS"] == 4 and doc.header["$MEASUREMENT"] == 1
+        auditor = doc.audit()
+        assert not auditor.has_errors, [str(e) for e in auditor.errors]
+        for layer in ("OUTLINE", "CENTER", "DIMENSIONS", "TEXT", "DETAIL", "TITLE"):
+            assert layer in doc.layers
+        assert doc.layers.get("CENTER").dxf.linetype.upper() == "CENTER"
+        centre = [e for e in doc.modelspace() if e.dxf.layer == "CENTER"]
+        assert len(centre) == 1 and centre[0].dxftype() == "LINE"
+        assert centre[0].dxf.start.y == centre[0].dxf.end.y == 0.0
+
+
+def test_dimension_measurements_are_the_design_values(drawings):
+    d, contact, _, _, docs = drawings
+    n, p = d.thread.engaged_teeth, d.thread.pitch_mm
+    expected = {
+        "screw": {"P = <>": p, "<> (threaded length)": d.screw.length_mm,
+                  "%%c<> major": d.screw.major_diameter_mm, "%%c<> minor": d.screw.minor_diameter_mm,
+                  "%%c<> pitch (theor.)": contact.theoretical_screw_pitch_diameter_mm,
+                  "<> (2 beta)": 2.0 * d.thread.flank_half_angle_deg},
+        "roller": {"P = <>": PL_R[0], "<> (threaded length)": n * p,
+                   "%%c<> major": d.roller.major_diameter_mm, "%%c<> minor": d.roller.minor_diameter_mm,
+                   "%%c<> pitch": d.roller.pitch_diameter_mm,
+                   # tangents at the pitch point: 2 asin(r_r / r_T) (= 2 beta for the default r_T)
+                   "<> (2 beta)": 2.0 * math.degrees(math.asin(0.5 * d.roller.pitch_diameter_mm
+                                                               / d.roller.arc_radius_mm)),
+                   "<> (flank arc r_T)": d.roller.arc_radius_mm},
+        "nut": {"P = <>": PL_N[0], "<> (threaded length)": n * p,
+                "%%c<> major": d.nut.major_diameter_mm, "%%c<> minor": d.nut.minor_diameter_mm,
+                "%%c<> pitch": d.nut.pitch_diameter_mm, "%%c<> body": d.nut.outer_diameter_mm,
+                "<> (2 beta)": 2.0 * d.thread.flank_half_angle_deg},
+    }
+    assert expected["roller"]["<> (2 beta)"] == pytest.approx(90.0, abs=1e-9)
+    assert contact.theoretical_screw_pitch_diameter_mm < d.screw.pitch_diameter_mm - 1e-4
+    for part, doc in docs.items():
+        dims = _dims(doc)
+        assert set(dims) == set(expected[part]), part
+        for text, value in expected[part].items():
+            assert dims[text].get_measurement() == pytest.approx(value, abs=1e-6), (part, text)
+            assert dims[text].dxf.layer == "DIMENSIONS"
+            assert dims[text].dxf.geometry in doc.blocks        # rendered
+        kinds = {t: dims[t].dimtype for t in dims}
+        assert kinds["<> (2 beta)"] == 5                         # angular, 3 points
+        if part == "roller":
+            assert kinds["<> (flank arc r_T)"] == 4                # radius
+
+
+def test_outlines_are_closed_and_the_screw_is_at_its_theoretical_pitch_diameter(drawings):
+    d, contact, _, _, docs = drawings
+    for part, doc in docs.items():
+        outline = [e for e in doc.modelspace() if e.dxf.layer == "OUTLINE"]
+        assert outline and all(e.dxftype() == "LWPOLYLINE" and e.closed for e in outline)
+        assert len(outline) == (2 if part == "nut" else 1)
+        detail = [e for e in doc.modelspace() if e.dxf.layer == "DETAIL"]
+        assert len(detail) == 1 and detail[0].closed
+    # at the theoretical pitch radius the screw's axial tooth and groove are both p / 2
+    (pl,) = [e for e in docs["screw"].modelspace() if e.dxf.layer == "OUTLINE"]
+    pts = np.array([(x, y) for x, y, *_ in pl.get_points("xy")])
+    r = 0.5 * contact.theoretical_screw_pitch_diameter_mm
+    top = pts[pts[:, 1] > 0]
+    xs = []
+    for (x0, y0), (x1, y1) in zip(top[:-1], top[1:]):
+        if (y0 - r) * (y1 - r) < 0:
+            xs.append(x0 + (x1 - x0) * (r - y0) / (y1 - y0))
+    widths = np.diff(np.sort(xs))
+    assert len(widths) > 30
+    np.testing.assert_allclose(widths, 0.5 * d.thread.pitch_mm, atol=1e-9)
+    assert pts[:, 1].max() == pytest.approx(0.5 * d.screw.major_diameter_mm, abs=1e-12)
+    assert pts[:, 1].min() == pytest.approx(-0.5 * d.screw.major_diameter_mm, abs=1e-12)
+
+
+def test_extents_and_limits(drawings):
+    _, _, _, _, docs = drawings
+    for doc in docs.values():
+        ext = bbox.extents(doc.modelspace())
+        np.testing.assert_allclose(doc.header["$EXTMIN"], ext.extmin, atol=1e-9)
+        np.testing.assert_allclose(doc.header["$EXTMAX"], ext.extmax, atol=1e-9)
+        assert tuple(doc.header["$PLIMMIN"])[:2] == (0.0, 0.0)
+        assert tuple(doc.header["$PLIMMAX"])[:2] == (420.0, 297.0)
+
+
+def test_paper_space_title_block_and_viewports(drawings):
+    d, _, _, _, docs = drawings
+    for part, doc in docs.items():
+        layouts = [name for name in doc.layout_names() if name != "Model"]
+        assert layouts == [f"A3_{part.upper()}"]
+        psp = doc.paperspace(layouts[0])
+        texts = " | ".join(e.dxf.text for e in psp if e.dxftype() == "TEXT" and e.dxf.layer == "TITLE")
+        for needle in (f"Design: {d.name}", f"Part: {part}", "Scale: 2:1", f"prs_geom: {VERSION}",
+                       f"Date: {DATE}", "Units: mm", "Material E: 212000 MPa", "nu: 0.3",
+                       f"Design sha256: {design_hash(d)}"):
+            assert needle in texts, (part, needle)
+        heights = {round(e.dxf.height, 6) for e in psp if e.dxftype() == "TEXT"}
+        assert {3.5, 5.0} <= heights
+        vps = [e for e in psp if e.dxftype() == "VIEWPORT"]
+        views = [v for v in vps if v.dxf.status != 1]
+        assert len(views) >= 2
+        scales = sorted(round(v.dxf.height / v.dxf.view_height, 9) for v in views)
+        assert scales == [2.0, 10.0]
+        for v in views:   # inside the A3 sheet
+            assert 0 < v.dxf.center.x - v.dxf.width / 2 and v.dxf.center.x + v.dxf.width / 2 < 420
+            assert 0 < v.dxf.center.y - v.dxf.height / 2 and v.dxf.center.y + v.dxf.height / 2 < 297
+
+
+#: what ezdxf stamps on every save with the current time (the creation date and the
+#: fingerprint GUID come from the date string and the design, so they must match)
+_VOLATILE = re.compile(rb"\n\$(TDUPDATE|TDUUPDATE|TDINDWG|TDUSRTIMER|VERSIONGUID)\r?\n *\d+\r?\n[^\r\n]*")
+_STAMP = re.compile(rb"\n[0-9.]+ @ \d{4}-\d\d-\d\dT[^\r\n]*")
+
+
+def test_dxf_bytes_are_deterministic(drawings, tmp_path):
+    d, contact, out, _, _ = drawings
+    names = write_drawings(d, contact, tmp_path, DATE, VERSION)
+    assert (tmp_path / names[-1]).read_bytes() == (out / names[-1]).read_bytes()     # the PDF too
+    names = names[:3]
+    created = re.search(rb"\n\$TDCREATE\r?\n *40\r?\n([^\r\n]*)", (tmp_path / names[0]).read_bytes())
+    assert float(created.group(1)) == juliandate(datetime(2026, 1, 2))
+    for name in names:
+        a, b = ((tmp_path / name).read_bytes(), (out / name).read_bytes())
+        assert _STAMP.sub(b"", _VOLATILE.sub(b"", a)) == _STAMP.sub(b"", _VOLATILE.sub(b"", b))
+
+
+def _pgm_ink(path) -> float:
+    data = path.read_bytes()
+    parts = data.split(maxsplit=4)             # P5, width, height, maxval, pixels
+    w, h = int(parts[1]), int(parts[2])
+    px = np.frombuffer(parts[4][: w * h], dtype=np.uint8)
+    return float((px < 128).mean())
+
+
+def test_pdf_has_one_non_empty_page_per_part(drawings, tmp_path):
+    _, _, out, _, _ = drawings
+    pdf = out / "drawings.pdf"
+    raw = pdf.read_bytes()
+    assert raw.startswith(b"%PDF") and len(raw) > 50_000
+    assert raw.count(b"/Type /Page\n") + raw.count(b"/Type /Page ") + raw.count(b"/Type /Page>") >= 3 or \
+        raw.count(b"/Type /Page") - raw.count(b"/Type /Pages") == 3
+    if shutil.which("pdftoppm") is None:
+        pytest.skip("pdftoppm not installed: page rendering not checked")
+    subprocess.run(["pdftoppm", "-r", "20", "-gray", str(pdf), str(tmp_path / "pg")], check=True)
+    pages = sorted(tmp_path.glob("pg-*.pgm"))
+    assert len(pages) == 3
+    for page in pages:
+        assert _pgm_ink(page) > 0.005, page
