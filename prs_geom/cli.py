@@ -293,10 +293,16 @@ def _execution(args: argparse.Namespace, quiet: bool):
     """Where the chunks of a study run (--workers, --scheduler, --dask-workers)."""
     from prs_geom.studies import Execution
 
+    from prs_geom.scaleout import resolve_backend
+
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers", args.workers, "must be >= 1")
     if args.dask_workers is not None and args.dask_workers < 1:
         raise DesignError("--dask-workers", args.dask_workers, "must be >= 1")
+    try:   # validate the combination up front, under the flags' own names
+        resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
+    except DesignError as exc:
+        raise exc.renamed("--" + exc.field.replace("_", "-")) from None
     return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
                      progress=silent if quiet else StderrProgress())
 
@@ -347,7 +353,12 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         if args.load_fraction:
             raise UsageError("give --spectrum or --load-fraction, not both")
         loads = load_spectrum(args.spectrum).loads_n
+    if args.confidence is not None and not 0.0 < args.confidence < 1.0:
+        raise DesignError("--confidence", args.confidence, "must be in (0, 1)")
     if args.target_ldc is not None:
+        if args.flank_um is not None:
+            raise UsageError("--flank-um and --target-ldc: the synthesis chooses the flank tolerance; "
+                             "leave out --flank-um")
         if args.confidence is None:
             args.confidence = 0.95
         if args.out:
@@ -377,8 +388,11 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         _print_json(study.section)
         return EXIT_OK
     s = study.section
+    per = [v for v in tols.flank_tolerances_um(design.thread.engaged_teeth).values()]
+    flank = (f"{tols.flank_um:g} um" if all(x == tols.flank_um for v in per for x in v)
+             else f"per tooth {min(min(v) for v in per):g}-{max(max(v) for v in per):g} um")
     print(f"design {design.name}: {s['samples']} samples (seed {s['seed']}), {tols.distribution} errors: "
-          f"flank {tols.flank_um:g} um, roller diameter {tols.roller_diameter_um:g} um, eccentricity "
+          f"flank {flank}, roller diameter {tols.roller_diameter_um:g} um, eccentricity "
           f"{tols.screw_eccentricity_um:g}/{tols.nut_eccentricity_um:g} um (screw/nut), lead {tols.lead_um:g} um, "
           f"temperature {tols.temperature_k:g} K")
     print(f"{'load':>8} {'no error':>9} {'median':>8} {'p95':>8} {'p99':>8} {'max':>8} {'roller share max p95':>21}")
@@ -556,7 +570,9 @@ def make_parser() -> argparse.ArgumentParser:
         g.add_argument("--temperature-k", type=float, metavar="T", help="temperature difference of each part, +-T K")
         g.add_argument("--distribution", choices=("uniform", "normal"),
                        help="uniform within +-T (default) or normal with T = 3 sigma")
-        g.add_argument("--samples", type=int, metavar="N", help="Monte Carlo samples (default 1000)")
+        g.add_argument("--samples", type=int, metavar="N",
+                       help="Monte Carlo samples (default: the design's [tolerances], else 1000; "
+                            "200 for design-pitch --robust)")
         g.add_argument("--seed", type=int, metavar="S", help="random seed (default 0)")
 
     p = sub.add_parser("build", help="run every stage and write all exports and report.json",

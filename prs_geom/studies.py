@@ -114,6 +114,8 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
     tolerances = tolerances or design.tolerances
     if tolerances is None:
         raise DesignError("tolerances", None, "the design has no [tolerances] section and none was given")
+    if confidence is not None and not 0.0 < confidence < 1.0:
+        raise DesignError("--confidence", confidence, "must be in (0, 1)")
     contact, model = _context(design, contact, model)
     errors = tol.error_model(design, contact, tolerances)
     F0 = design.loading.axial_load_n
@@ -236,10 +238,16 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
     allocated (T_j = w_j T_mean with w_j from :func:`~prs_geom.analysis.tolerance.allocation_weights`,
     inverse to each flank's linearised influence). Each is re-checked by an independent run
     from ``verify_seed`` (default seed + 1)."""
-    if target_ldc < 1.0:
-        raise DesignError("--target-ldc", target_ldc, "must be >= 1 (the mean tooth carries 1)")
+    if not (math.isfinite(target_ldc) and target_ldc >= 1.0):
+        raise DesignError("--target-ldc", target_ldc, "must be a number >= 1 (the mean tooth carries 1)")
     if not 0.0 < confidence < 1.0:
         raise DesignError("--confidence", confidence, "must be in (0, 1)")
+    if tol.clopper_pearson_lower(samples, samples, CP_LEVEL) < confidence:
+        # even every sample meeting the target would not prove the confidence
+        need = math.ceil(math.log(1.0 - CP_LEVEL) / math.log(confidence))
+        raise DesignError("--samples", samples, f"too few to show probability {confidence:g} at "
+                                                f"{CP_LEVEL:.0%} confidence even if every sample met the "
+                                                f"target: use at least {need}")
     contact, model = _context(design, contact, model)
     n = design.thread.engaged_teeth
     base = replace(base or Tolerances(), flank_um=0.0, screw_flank_um=None, roller_screw_flank_um=None,
@@ -265,6 +273,8 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
         k, _ = _success(prob, samples, seed, execution, target_ldc, "synthesis")
         return tol.clopper_pearson_lower(k, samples, CP_LEVEL) >= confidence, k
 
+    capped: list[bool] = []
+
     def search(w: dict[str, NDArray] | None) -> tuple[int, int]:
         ok0, k0 = passes(0, w)
         if not ok0:
@@ -277,6 +287,7 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
                 break
             lo = hi
             if hi >= limit:
+                capped.append(True)
                 return limit, samples
             hi = min(2 * hi, limit)
         while hi - lo > 1:
@@ -298,7 +309,8 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
     alloc = {k: tuple(map(float, _round_down(weights[k] * units_a * TOLERANCE_STEP_UM))) for k in FLANK_FIELDS}
 
     checks: dict[str, Any] = {"samples": samples, "seed": seed, "verify_seed": verify_seed,
-                              "load_fractions": list(load_fractions)}
+                              "load_fractions": list(load_fractions),
+                              "capped_at_um": SYNTHESIS_MAX_UM if capped else None}
     for name, per in (("uniform", {k: np.full(n, T_u) for k in FLANK_FIELDS}),
                       ("allocated", {k: np.array(v) for k, v in alloc.items()})):
         prob = replace(problem0, errors=model_for(per))

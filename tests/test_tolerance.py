@@ -223,10 +223,11 @@ def test_synthesis_meets_target_in_independent_rerun(graded):
     assert np.mean(st.worst <= target) >= conf
     # one step looser fails the bound: the synthesis found the largest tolerance on its grid
     looser = studies.tolerance_study(
-        d, Tolerances(flank_um=res.uniform_um + 2 * studies.TOLERANCE_STEP_UM, samples=N, seed=3),
+        d, Tolerances(flank_um=round(res.uniform_um + studies.TOLERANCE_STEP_UM, 6), samples=N, seed=3),
         contact=c, model=m, importance=False)
     k = int((looser.worst <= target).sum())
-    assert T.clopper_pearson_lower(k, N, studies.CP_LEVEL) < conf or res.uniform_um >= studies.SYNTHESIS_MAX_UM
+    assert res.checks["capped_at_um"] is None
+    assert T.clopper_pearson_lower(k, N, studies.CP_LEVEL) < conf
     # the allocation is looser where the influence is smaller
     infl = np.concatenate(list(res.influence_per_um.values()))
     alloc = np.concatenate([np.array(v) for v in res.allocation_um.values()])
@@ -297,3 +298,67 @@ def test_cli_confidence_reports_quantile():
     assert code == 0, err
     a = json.loads(out)["at_confidence"]
     assert a["confidence"] == 0.9 and a["upper_bound_95"] >= a["worst_ldc_quantile"] > 1.4
+
+
+def test_error_map_matches_pitch_list_gaps(graded):
+    """Independent formulation: roller and nut flank and lead errors are pitch-list changes, so
+    their gap changes must equal gap_terms_rollers of the perturbed lists."""
+    from prs_geom.analysis.loads import gap_terms_rollers
+    d, c, _ = graded
+    em = T.error_model(d, c, Tolerances())
+    n, z = d.thread.engaged_teeth, d.roller.count
+    g0 = gap_terms_rollers(d)
+    pr = np.tile(np.array(d.pitch_list("roller")), (z, 1))
+    pn = np.array(d.pitch_list("nut"))
+    e = 1e-3
+    # roller 2's nut-side flank of tooth 5 moved +e: pitch 4 (to tooth 5) longer, pitch 5 shorter
+    x = np.zeros((1, em.size))
+    x[0, em.columns("roller_nut_flank").start + 2 * n + 4] = e
+    dn, ds = em.gaps(x)
+    pr2 = pr.copy()
+    pr2[2, 3] += e
+    pr2[2, 4] -= e
+    ref = gap_terms_rollers(d, pr2, pn)
+    assert np.max(np.abs(dn[0] - (ref[0] - g0[0]))) < 1e-13        # nut side as the pitch list says
+    # (the screw-side gap of the roller flank is the other flank: untouched here)
+    assert np.max(np.abs(ds[0])) == 0
+    # nut base lead longer by L over the engaged length: every nut pitch + L / (n - 1)
+    x = np.zeros((1, em.size))
+    x[0, em.columns("lead").start + 1 + z] = e
+    dn, ds = em.gaps(x)
+    ref = gap_terms_rollers(d, pr, pn + e / (n - 1))
+    # (cumulative sums of 2 mm pitches: rounding about 1e-15 mm per tooth)
+    assert np.max(np.abs(dn[0] - (ref[0] - g0[0]))) < 1e-13 and np.max(np.abs(ds[0] - (ref[1] - g0[1]))) < 1e-13
+    # roller 4's base lead
+    x = np.zeros((1, em.size))
+    x[0, em.columns("lead").start + 1 + 4] = e
+    dn, ds = em.gaps(x)
+    pr2 = pr.copy()
+    pr2[4] += e / (n - 1)
+    ref = gap_terms_rollers(d, pr2, pn)
+    # (cumulative sums of 2 mm pitches: rounding about 1e-15 mm per tooth)
+    assert np.max(np.abs(dn[0] - (ref[0] - g0[0]))) < 1e-13 and np.max(np.abs(ds[0] - (ref[1] - g0[1]))) < 1e-13
+
+
+def test_eccentric_screw_loads_the_roller_it_moves_towards(graded):
+    d, c, m = graded
+    em = T.error_model(d, c, Tolerances())
+    prob = T.study_problem(d, m, em, [1.0])
+    x = np.zeros((1, em.size))
+    x[0, em.columns("screw_eccentricity").start] = 2e-3            # screw offset 2 um towards roller 0
+    share = T.solve_samples(prob, x, d.loading.axial_load_n).roller_load_share[0] * d.roller.count
+    assert np.argmax(share) == 0 and np.argmin(share) == d.roller.count // 2 and share[0] > 1.1
+
+
+def test_synthesis_refuses_too_few_samples_up_front(graded):
+    d, c, m = graded
+    with pytest.raises(DesignError, match=r"--samples = 50: too few .* at least 59"):
+        studies.synthesise(d, 1.5, 0.95, samples=50, contact=c, model=m)
+    with pytest.raises(DesignError, match=r"--target-ldc"):
+        studies.synthesise(d, float("nan"), 0.95, samples=100, contact=c, model=m)
+    code, out, err = _run(["tolerance", "--target-ldc", "1.5", "--samples", "50"])
+    assert code == 2 and "at least 59" in err
+    code, out, err = _run(["tolerance", "--confidence", "1.5", "--samples", "5000"])
+    assert code == 2 and "--confidence = 1.5" in err
+    code, out, err = _run(["tolerance", "--workers", "2", "--dask-workers", "2"])
+    assert code == 2 and err.startswith("error: --workers")
