@@ -107,13 +107,21 @@ def _svg(text: str) -> str:
     return text[text.index("<svg"):]
 
 
+def _flank_text(tol: dict[str, Any]) -> Any:
+    """The flank tolerance: one value, or the per-tooth range when the lists differ."""
+    values = [x for v in tol["per_tooth_flank_um"].values() for x in v]
+    if all(x == tol["flank_um"] for x in values):
+        return tol["flank_um"]
+    return f"per tooth {min(values):g} to {max(values):g}"
+
+
 def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     """The tolerance section: error model, quantiles per load, roller share, importance, plot."""
     tol = t["tolerances"]
     out = [f"<h2 id='tolerance'>Tolerances and load sharing</h2>",
            f"<p class='note'>{t['samples']} Monte Carlo samples (seed {t['seed']}), all rollers side by "
            f"side; {html.escape(tol['distribution'])} errors; source: {html.escape(tol['source'])}.</p>",
-           _table([["flank position (um)", tol["flank_um"]], ["roller pitch diameter (um)", tol["roller_diameter_um"]],
+           _table([["flank position (um)", _flank_text(tol)], ["roller pitch diameter (um)", tol["roller_diameter_um"]],
                    ["screw eccentricity (um)", tol["screw_eccentricity_um"]],
                    ["nut eccentricity (um)", tol["nut_eccentricity_um"]], ["base lead (um)", tol["lead_um"]],
                    ["temperature difference (K)", tol["temperature_k"]]], ["error term", "tolerance T"])]
