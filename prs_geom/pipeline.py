@@ -255,6 +255,9 @@ def stage_manufacturing(ctx: BuildContext) -> None:
 
     insp = inspection_report(inspection(ctx.design, ctx.contact))
     ctx.report["inspection"] = insp
+    from prs_geom.exports.sheets import inspection_csv
+
+    ctx.write_text("inspection.csv", inspection_csv(insp))
     ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact, insp)
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():

@@ -58,20 +58,20 @@ def test_dimension_measurements_are_the_design_values(drawings):
         "screw": {"P = <>": p, "<> (threaded length)": d.screw.length_mm,
                   "%%c<> major": d.screw.major_diameter_mm, "%%c<> minor": d.screw.minor_diameter_mm,
                   "%%c<> pitch (theor.)": contact.theoretical_screw_pitch_diameter_mm,
-                  "<> (2 beta)": 2.0 * d.thread.flank_half_angle_deg},
+                  "<> (included flank angle)": 2.0 * d.thread.flank_half_angle_deg},
         "roller": {"P = <>": PL_R[0], "<> (threaded length)": n * p,
                    "%%c<> major": d.roller.major_diameter_mm, "%%c<> minor": d.roller.minor_diameter_mm,
                    "%%c<> pitch": d.roller.pitch_diameter_mm,
                    # tangents at the pitch point: 2 asin(r_r / r_T) (= 2 beta for the default r_T)
-                   "<> (2 beta)": 2.0 * math.degrees(math.asin(0.5 * d.roller.pitch_diameter_mm
+                   "<> (included flank angle)": 2.0 * math.degrees(math.asin(0.5 * d.roller.pitch_diameter_mm
                                                                / d.roller.arc_radius_mm)),
                    "<> (flank arc r_T)": d.roller.arc_radius_mm},
         "nut": {"P = <>": PL_N[0], "<> (threaded length)": n * p,
                 "%%c<> major": d.nut.major_diameter_mm, "%%c<> minor": d.nut.minor_diameter_mm,
                 "%%c<> pitch": d.nut.pitch_diameter_mm, "%%c<> body": d.nut.outer_diameter_mm,
-                "<> (2 beta)": 2.0 * d.thread.flank_half_angle_deg},
+                "<> (included flank angle)": 2.0 * d.thread.flank_half_angle_deg},
     }
-    assert expected["roller"]["<> (2 beta)"] == pytest.approx(90.0, abs=1e-9)
+    assert expected["roller"]["<> (included flank angle)"] == pytest.approx(90.0, abs=1e-9)
     assert contact.theoretical_screw_pitch_diameter_mm < d.screw.pitch_diameter_mm - 1e-4
     for part, doc in docs.items():
         dims = _dims(doc)
@@ -81,7 +81,7 @@ def test_dimension_measurements_are_the_design_values(drawings):
             assert dims[text].dxf.layer == "DIMENSIONS"
             assert dims[text].dxf.geometry in doc.blocks        # rendered
         kinds = {t: dims[t].dimtype for t in dims}
-        assert kinds["<> (2 beta)"] == 5                         # angular, 3 points
+        assert kinds["<> (included flank angle)"] == 5                         # angular, 3 points
         if part == "roller":
             assert kinds["<> (flank arc r_T)"] == 4                # radius
 

@@ -225,3 +225,13 @@ def test_build_reports_inspection_and_sheets_carry_it(built):
     for part in ("roller", "nut"):
         header, _ = read_sheet_csv((out / f"machining_{part}.csv").read_text())
         assert f"M = {insp[part]['measurement_mm']:.6f} mm" in header["inspection"]
+
+
+def test_inspection_csv_reads_back(built):
+    import csv as _csv
+    d, out, report = built
+    lines = [l for l in (out / "inspection.csv").read_text().splitlines() if not l.startswith("#")]
+    rows = list(_csv.DictReader(lines))
+    assert [r["part"] for r in rows] == ["screw", "roller", "nut"]
+    for r in rows:
+        assert float(r["measurement_mm"]) == report["inspection"][r["part"]]["measurement_mm"]

@@ -300,7 +300,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     ra = 0.45 * p                                   # radius of the dimension arc
     first, second = (d_lo, d_up) if sgn > 0 else (-d_up, -d_lo)   # counter-clockwise order
     msp.add_angular_dim_3p(base=(dx, apex_y + sgn * ra), center=tuple(apex), p1=tuple(apex + ra * first),
-                           p2=tuple(apex + ra * second), text="<> (2 beta)", override=ovd,
+                           p2=tuple(apex + ra * second), text="<> (included flank angle)", override=ovd,
                            dxfattribs={"layer": "DIMENSIONS"}).render()
     rt = getattr(profile.flank, "arc_radius", None)
     if rt is not None:

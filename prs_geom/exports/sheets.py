@@ -81,6 +81,12 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     keys = list(dict.fromkeys(k for sh in sheets.values() for k in sh.header))
     for k in keys:
         summary.append([k] + [sheets[p].header.get(k) for p in parts])
+        fmt = "0.00000" if k.endswith("_mm") else "0.00" if k.endswith("_um") or "_um_" in k else \
+            "0.000" if k.endswith(("_deg", "_degC")) else "0.0000"
+        for c in range(2, len(parts) + 2):
+            cell = summary.cell(row=summary.max_row, column=c)
+            if isinstance(cell.value, float):
+                cell.number_format = fmt
     r0 = len(keys) + 4
     summary.cell(row=r0, column=1, value="thread starts").font = Font(bold=True)
     r0 += 1
@@ -101,6 +107,7 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
         summary.column_dimensions[get_column_letter(c)].width = 60
         for r in range(3, len(keys) + 3):
             summary.cell(row=r, column=c).alignment = Alignment(wrap_text=True, vertical="top")
+    summary.freeze_panes = "A3"                 # the title and the part names stay
     _print_setup(summary, design, "summary", version, date)
     for part, sheet in sheets.items():
         ws = wb.create_sheet(part)
@@ -160,3 +167,19 @@ def read_xlsx(path: Path) -> dict[str, list[dict[str, object]]]:
             continue
         out[ws.title] = [dict(zip(keys, r[:len(keys)])) for r in rows[k + 1:] if r and r[0] is not None]
     return out
+
+
+def inspection_csv(reports: dict[str, dict]) -> str:
+    """``inspection.csv``: one row per part (screw, roller, nut) with the over-wire /
+    over-ball values of :func:`prs_geom.analysis.inspection.inspection_report` (keys carry
+    their units; numbers in shortest round-trip form, at 20 degC)."""
+    rows = list(reports.values())
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    buf = io.StringIO()
+    buf.write("# over-wire (screw, roller) and over-ball (nut) inspection at 20 degC; "
+              "docs/theory/inspection.md\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(keys)
+    for r in rows:
+        w.writerow([_cell(r.get(k)) for k in keys])
+    return buf.getvalue()
