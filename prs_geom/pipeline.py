@@ -278,7 +278,8 @@ def stage_html(ctx: BuildContext) -> None:
     write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
                contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
                tolerance=ctx.report.get("tolerance"),
-               mesh_checks=ctx.meshes.checks if ctx.meshes else None)
+               mesh_checks=ctx.meshes.checks if ctx.meshes else None,
+               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_drawing_date())
 
 
 #: Stages in run order: (report name, function).

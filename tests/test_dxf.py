@@ -91,3 +91,19 @@ def test_nut_flank_positions_match_pitch_list(drawing):
     # so its lower flank is missing; the pitch list starts at tooth 1 -> 2 for the upper flanks
     np.testing.assert_allclose(np.diff(up[:20]), PL_N, atol=1e-5, rtol=0)
     np.testing.assert_allclose(np.diff(low[:19]), PL_N[1:], atol=1e-5, rtol=0)
+
+
+def test_profiles_dxf_extents_are_set(tmp_path):
+    """Read back with ezdxf: $EXTMIN/$EXTMAX equal the bounding box of the model-space entities."""
+    import ezdxf
+    from ezdxf import bbox
+
+    from prs_geom.exports.dxf import write_dxf
+    from prs_geom.model.design import default_design
+    path = tmp_path / "p.dxf"
+    write_dxf(default_design(), path)
+    doc = ezdxf.readfile(path)
+    ext = bbox.extents(doc.modelspace())
+    assert tuple(doc.header["$EXTMIN"])[:2] == pytest.approx(tuple(ext.extmin)[:2], abs=1e-9)
+    assert tuple(doc.header["$EXTMAX"])[:2] == pytest.approx(tuple(ext.extmax)[:2], abs=1e-9)
+    assert ext.extmax[0] - ext.extmin[0] > 50.0

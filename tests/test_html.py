@@ -65,3 +65,27 @@ def test_3d_view_is_not_blank(report_html, tmp_path):
     # the part colours are there: green rollers
     green = (region[:, :, 1] > region[:, :, 0] + 15) & (region[:, :, 1] > region[:, :, 2] + 15)
     assert green.mean() > 0.02
+
+
+@pytest.mark.parametrize("size", ["700,900", "1600,1000"])
+def test_3d_view_fits_the_window_without_clipping(report_html, tmp_path, size):
+    """In a real browser at two window sizes: the canvas follows the page width, no part pixel
+    touches the canvas border (nothing clipped), the parts cover a fair share of the view, and a
+    screenshot shows the view and the tables below it (not blank)."""
+    import re
+
+    from PIL import Image
+    r = chromium([f"--window-size={size}", "--dump-dom", report_html.as_uri()], tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    body = r.stdout[r.stdout.index("<body"):r.stdout.index(">", r.stdout.index("<body")) + 1]
+    attrs = dict(re.findall(r'data-([a-z-]+)="([^"]*)"', body))
+    assert attrs["edge-pixels"] == "0", attrs
+    w, h = map(int, attrs["canvas"].split("x"))
+    assert w <= min(900, int(size.split(",")[0])) and abs(h - round(w * 560 / 900)) <= 1
+    assert float(attrs["coverage"]) > 0.08
+    shot = tmp_path / "shot.png"
+    r = chromium([f"--window-size={size}", f"--screenshot={shot}", report_html.as_uri()], tmp_path)
+    assert r.returncode == 0 and shot.exists()
+    img = np.asarray(Image.open(shot).convert("RGB")).astype(float)
+    green = (img[:, :, 1] > img[:, :, 0] + 15) & (img[:, :, 1] > img[:, :, 2] + 15)
+    assert green.mean() > 0.005                                     # the rollers are in the shot

@@ -122,4 +122,9 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
     for i, text in enumerate(lines):
         msp.add_text(text, height=TEXT_HEIGHT, dxfattribs={"layer": "ANNOTATION"}).set_placement(
             (x0 + 2.0, -6.0 - 2.0 * TEXT_HEIGHT * (i + 1) + TEXT_HEIGHT))
+    # $EXTMIN/$EXTMAX: the real model-space extents (CAD "zoom extents" and viewers use them)
+    from ezdxf import bbox
+    ext = bbox.extents(msp)
+    msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
+    doc.header["$EXTMIN"], doc.header["$EXTMAX"] = msp.dxf.extmin, msp.dxf.extmax
     save_dxf(doc, path)

@@ -107,6 +107,54 @@ def _svg(text: str) -> str:
     return text[text.index("<svg"):]
 
 
+def _design_hash(design: PRSDesign) -> str:
+    """First 12 hex digits of the sha256 of the design's TOML text (as on the drawings)."""
+    import hashlib
+
+    from prs_geom.model.io import dumps_toml
+    return hashlib.sha256(dumps_toml(design).encode("utf-8")).hexdigest()[:12]
+
+
+def _checks_html(checks: dict[str, Any], contact: ContactResult | None) -> str:
+    """Interference, FCL verification and per-tooth gaps, as measured."""
+    out = ["<h2 id='checks'>Checks</h2>"]
+    it = checks.get("interference")
+    if it:
+        out.append(f"<p>Interference ({html.escape(str(it.get('screw', '')))} screw, pitch diameter "
+                   f"{it.get('screw_pitch_diameter_mm', '')} mm): <b>{'FOUND' if it['found'] else 'none'}</b> "
+                   f"in {it.get('pairs_checked', '')} part pairs at chord tolerance {it.get('chord_tolerance_mm')} mm. "
+                   f"{html.escape(str(it.get('rule', '')))}</p>")
+        rows = [[" - ".join(p["pair"]) if isinstance(p.get("pair"), list) else p.get("pair"),
+                 p.get("volume_mm3"), p.get("mean_thickness_mm")] for p in it.get("pairs", [])]
+        if rows:
+            out.append(_table(rows, ["pair", "overlap volume (mm3)", "mean thickness (mm)"], full=True))
+        ok = it.get("contact_within_tolerance") or []
+        if ok:
+            out.append(_table([[" - ".join(p["pair"]), p["volume_mm3"], p["mean_thickness_mm"], len(p["teeth"])]
+                               for p in ok], ["touching pair (within the mesh tolerance)", "overlap volume (mm3)",
+                                              "mean thickness (mm)", "teeth"], full=True))
+    fc = checks.get("fcl")
+    if fc:
+        out.append(f"<p>FCL mesh distance against the analytic contact: largest difference "
+                   f"{fc['max_abs_difference_mm']:.3e} mm (tolerance {fc['difference_tolerance_mm']} mm).</p>")
+        out.append(_table([[c["side"], c["roller"], c["tooth"], c["analytic_distance_mm"], c["fcl_distance_mm"],
+                            c["difference_mm"]] for c in fc["comparisons"]],
+                          ["side", "roller", "tooth", "analytic distance (mm)", "FCL distance (mm)",
+                           "difference (mm)"], full=True))
+    if contact is not None and contact.tooth_gaps:
+        g = contact.tooth_gaps
+        rows = []
+        for side in ("screw", "nut"):
+            for flank in ("upper", "lower"):
+                if side in g and flank in g[side]:
+                    vals = [x for row in g[side][flank]["gap_mm"] for x in row]
+                    rows.append([side, flank, min(vals) * 1e3, max(vals) * 1e3])
+        if rows:
+            out.append("<h3>Unloaded gaps per tooth (all rollers)</h3>" + _table(
+                rows, ["side", "flank", "smallest gap (um)", "largest gap (um)"], full=True))
+    return "".join(out)
+
+
 def _flank_text(tol: dict[str, Any]) -> Any:
     """The flank tolerance: one value, or the per-tooth range when the lists differ."""
     values = [x for v in tol["per_tooth_flank_um"].values() for x in v]
@@ -145,7 +193,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                contact: ContactResult | None = None, loads: LoadsResult | None = None,
                plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
                mesh_checks: list[dict[str, Any]] | None = None,
-               tolerance: dict[str, Any] | None = None) -> None:
+               tolerance: dict[str, Any] | None = None, checks: dict[str, Any] | None = None,
+               inspection: dict[str, Any] | None = None, date: str = "") -> None:
     """Write ``report.html`` from the stage results of a build.
 
     ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
@@ -153,8 +202,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     package data (``templates/report.html``, ``report.css``, ``viewer.js``).
     """
     parts = [f"<h1>Planetary roller screw '{html.escape(design.name)}'</h1>",
-             f"<p class='note'>prs_geom {html.escape(version)}. Units mm, N, MPa; "
-             f"tooth 1 at the loaded end.</p>",
+             f"<p class='note' id='provenance'>prs_geom {html.escape(version)}; {html.escape(date)}; "
+             f"design sha256 {_design_hash(design)}. Units mm, N, MPa; tooth 1 at the loaded end.</p>",
              "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
              + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
              if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
@@ -189,6 +238,15 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
         parts.append("<div class='plots'>" + "".join(_svg(t) for t in shown) + "</div>")
     if tolerance is not None:
         parts.append(_tolerance_html(tolerance, plots_svg or {}))
+    if checks:
+        parts.append(_checks_html(checks, contact))
+    if inspection:
+        keys = ["gauge", "pitch_diameter_mm", "lead_angle_deg", "gauge_diameter_mm", "measurement_mm",
+                "measurement_correction_um", "numerical_check_um", "temperature_coefficient_um_per_k"]
+        parts.append("<h2 id='inspection'>Inspection (20 degC)</h2>" + _table(
+            [[part] + [r[k] for k in keys] for part, r in inspection.items()], ["part"] + keys, full=True)
+            + "".join(f"<p class='note'>{html.escape(part)}: {html.escape(r['method'])}</p>"
+                      for part, r in inspection.items()))
     for part, sheet in (machining or {}).items():
         parts.append(f"<h2>Machining sheet: {html.escape(part)}</h2>")
         parts.append(_table([[k, v] for k, v in sheet.header.items()]))

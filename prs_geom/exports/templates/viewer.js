@@ -40,12 +40,13 @@
     }
   }
   const centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
-  const span = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  // the bounding box's diagonal: the assembly's projection fits it at every rotation
+  const span = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
   const canvas = document.getElementById('view'), ctx = canvas.getContext('2d');
   let yaw = 0.6, pitch = -1.2, zoom = 1.0;
   const depth = new Float32Array(nTri), order = new Uint32Array(nTri), X = new Float32Array(nTri * 6);
   function draw() {
-    const W = canvas.width, H = canvas.height, s = zoom * 0.9 * Math.min(W, H) / span;
+    const W = canvas.width, H = canvas.height, s = zoom * 0.96 * Math.min(W, H) / span;
     const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
     // rotation: yaw about z, then pitch about x (view looks along -z of the rotated frame)
     const R = [cy, -sy, 0, cp * sy, cp * cy, -sp, sp * sy, sp * cy, cp];
@@ -81,6 +82,17 @@
       ctx.moveTo(X[i * 6], X[i * 6 + 1]); ctx.lineTo(X[i * 6 + 2], X[i * 6 + 3]); ctx.lineTo(X[i * 6 + 4], X[i * 6 + 5]);
       ctx.closePath(); ctx.fill(); ctx.stroke();
     }
+    // self-check for the browser tests: model pixels on the canvas border mean clipping;
+    // coverage = share of the canvas the parts cover (sampled every 4th pixel)
+    const img = ctx.getImageData(0, 0, W, H).data;
+    const bg = (o) => Math.abs(img[o] - 0xf4) + Math.abs(img[o + 1] - 0xf6) + Math.abs(img[o + 2] - 0xf8) < 12;
+    let edge = 0, cover = 0, total = 0;
+    for (let x = 0; x < W; x++) { if (!bg(4 * x)) edge++; if (!bg(4 * ((H - 1) * W + x))) edge++; }
+    for (let y = 0; y < H; y++) { if (!bg(4 * y * W)) edge++; if (!bg(4 * (y * W + W - 1))) edge++; }
+    for (let y = 0; y < H; y += 4) for (let x = 0; x < W; x += 4) { total++; if (!bg(4 * (y * W + x))) cover++; }
+    document.body.dataset.edgePixels = String(edge);
+    document.body.dataset.coverage = (cover / total).toFixed(3);
+    document.body.dataset.canvas = W + 'x' + H;
     document.getElementById('viewinfo').textContent =
       nTri + ' triangles (' + n + ' facing the viewer), display tolerance ' + data.tolerance_mm + ' mm. Drag to rotate, wheel to zoom.';
   }
@@ -94,7 +106,15 @@
   });
   document.getElementById('cutaway').addEventListener('change', later);
   canvas.addEventListener('wheel', e => { e.preventDefault(); zoom *= Math.exp(-0.001 * e.deltaY); later(); }, { passive: false });
-  draw();
+  // the canvas follows the page width (at most its 900 px design width), keeping its aspect
+  function resize() {
+    const w = Math.max(200, Math.min(900, Math.floor(canvas.parentElement.clientWidth || 900)));
+    const h = Math.round(w * 560 / 900);
+    if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
+    draw();
+  }
+  window.addEventListener('resize', resize);
+  resize();
   document.body.dataset.triangles = String(nTri);
   document.body.dataset.viewer = 'ok';
 })();
