@@ -73,6 +73,9 @@ def test_csv_reads_back_to_report_numbers(built):
         assert header["design"] == d.name and header["part"] == part
         assert float(header["base_pitch_mm"]) == ref["header"]["base_pitch_mm"]
         assert len(rows) == len(ref["rows"]) == 2 * d.thread.engaged_teeth
+        for got in rows:      # the shop's identity, on the numbers as read back
+            assert abs(float(got["designed_position_mm"]) - (float(got["base_position_mm"])
+                                                             + float(got["axial_shift_um"]) / 1000)) < 1e-9
         for got, want in zip(rows, ref["rows"]):
             for key, _, unit in COLUMNS:
                 if isinstance(want[key], float):
@@ -92,6 +95,8 @@ def test_xlsx_reads_back_to_report_numbers(built):
     for part, rows in wb.items():
         ref = report["machining"][part]["rows"]
         assert len(rows) == len(ref)
+        for got in rows:
+            assert abs(got["designed_position_mm"] - (got["base_position_mm"] + got["axial_shift_um"] / 1000)) < 1e-9
         for got, want in zip(rows, ref):
             for key, _, _ in COLUMNS:
                 w = want[key]

@@ -193,6 +193,7 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
         "flank_half_angle_deg": design.thread.flank_half_angle_deg,
         "teeth": n,
         "tolerance": tol_text,
+        "cumulative_lead_tolerance_um": (tol.lead_um if tol is not None and tol.lead_um > 0 else None),
         "reference_temperature_degC": REFERENCE_TEMPERATURE_C,
         "thermal_growth_of_engaged_length_um_per_K": float((n - 1) * design.thread.pitch_mm * alpha * 1e3),
         "process": "cut at the base pitch with the thickness stock, then grind lower flanks +z "
