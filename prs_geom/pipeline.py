@@ -233,9 +233,9 @@ def stage_checks(ctx: BuildContext) -> None:
     ctx.report["warnings"] += check_warnings(ctx.report)
 
 
-def _drawing_date() -> str:
-    """Date of the drawing title blocks: SOURCE_DATE_EPOCH when set (reproducible builds, the
-    goldens), else today (UTC)."""
+def _build_date() -> str:
+    """Date a build prints (drawing title blocks, report.html): SOURCE_DATE_EPOCH when set
+    (reproducible builds, the goldens), else today (UTC)."""
     import os
     from datetime import datetime, timezone
 
@@ -262,13 +262,13 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
-    write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, time.strftime("%Y-%m-%d"))
+    write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, _build_date())
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
     from prs_geom.exports.drawing import write_drawings
 
-    ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _drawing_date(), __version__)
+    ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
 
 
 def stage_html(ctx: BuildContext) -> None:
@@ -279,7 +279,7 @@ def stage_html(ctx: BuildContext) -> None:
                contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
                tolerance=ctx.report.get("tolerance"),
                mesh_checks=ctx.meshes.checks if ctx.meshes else None,
-               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_drawing_date())
+               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date())
 
 
 #: Stages in run order: (report name, function).

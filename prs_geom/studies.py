@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult, analyse_contact
-from prs_geom.analysis.loads import LoadModel, build_model, design_pitches, forward, with_pitch_lists
+from prs_geom.analysis.loads import LoadModel, build_model, design_pitches, forward, pitch_gaps, with_pitch_lists
 from prs_geom.analysis.robust import PitchFamily, weighted_quantile
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
@@ -352,19 +352,11 @@ def _robust_eval(task: _RobustTask) -> NDArray:
     """Worst coefficients (L, B) of one member of the family on the study's draws."""
     e = task.problem.errors
     roller, nut = task.family.lists(*task.point)
-    # gaps of the member's lists: the designed gaps of every roller
-    g_nr, g_rs = _member_gaps(roller, nut, task.family.pitch_mm, e.z)
+    # gaps of the member's lists: the designed gaps, the same for every roller
+    g_nr, g_rs = (np.tile(g, (e.z, 1)) for g in pitch_gaps(task.family.pitch_mm, roller, nut))
     prob = task.problem.with_gaps(g_nr, g_rs)
     parts = [tol.evaluate(prob, e.sample(s, c)).worst for s, c in task.seeds]
     return np.concatenate(parts, axis=1)
-
-
-def _member_gaps(roller: NDArray, nut: NDArray, p: float, z: int) -> tuple[NDArray, NDArray]:
-    # as loads.gap_terms: cumulative differences from tooth 1, in full precision
-    zero = np.zeros(1)
-    g_nr = np.concatenate([zero, np.cumsum((roller - p) - (nut - p))])
-    g_rs = np.concatenate([zero, np.cumsum(-(roller - p))])
-    return np.tile(g_nr, (z, 1)), np.tile(g_rs, (z, 1))
 
 
 @dataclass(frozen=True)

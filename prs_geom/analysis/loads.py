@@ -82,7 +82,7 @@ from prs_geom.progress import ProgressFn
 
 __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResult", "block_compliance",
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
-           "forward", "gap_terms", "gap_terms_rollers", "axial_stiffness", "design_pitches",
+           "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
            "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks"]
@@ -236,9 +236,19 @@ def gap_terms(design: PRSDesign, roller: Sequence[float] | None = None,
 
     ``roller`` / ``nut`` may carry a leading batch axis ((B, n - 1) pitch lists): the gaps
     then have shape (B, n), computed row by row exactly as for one list."""
-    p = design.thread.pitch_mm
-    pr = np.asarray(roller if roller is not None else design.pitch_list("roller"), dtype=np.float64)
-    pn = np.asarray(nut if nut is not None else design.pitch_list("nut"), dtype=np.float64)
+    return pitch_gaps(design.thread.pitch_mm,
+                      roller if roller is not None else design.pitch_list("roller"),
+                      nut if nut is not None else design.pitch_list("nut"))
+
+
+def pitch_gaps(pitch: float, roller: Sequence[float] | NDArray,
+               nut: Sequence[float] | NDArray) -> tuple[NDArray, NDArray]:
+    """:func:`gap_terms` of roller and nut pitch lists (mm) with the screw at ``pitch``: the
+    cumulative sums run over the differences from the pitch, so sub-um corrections keep full
+    float64 precision on 40 mm positions. A leading batch axis is kept."""
+    p = pitch
+    pr = np.asarray(roller, dtype=np.float64)
+    pn = np.asarray(nut, dtype=np.float64)
     pr, pn = np.broadcast_arrays(pr, pn)
     zero = np.zeros(pr.shape[:-1] + (1,))
     g_nr = np.concatenate([zero, np.cumsum((pr - p) - (pn - p), axis=-1)], axis=-1)

@@ -118,9 +118,11 @@ INDEXING = ("grind start 1 over the engaged length; then for each next start ind
             "flanks of all starts first, then the upper flanks")
 
 
-def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]) -> MachiningSheet:
+def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float],
+                    inspection: dict[str, Any] | None = None) -> MachiningSheet:
     """The sheet of ``part`` ("roller" or "nut"); ``normal_axial`` maps "screw" and "nut" to
-    the |n_z| of the screw-roller and roller-nut contacts."""
+    the |n_z| of the screw-roller and roller-nut contacts; ``inspection``: the part's report
+    from :func:`prs_geom.analysis.inspection.inspection_report`, stated in the header."""
     pl = np.asarray(design.pitch_list(part), dtype=np.float64)
     n = len(pl) + 1
     p_b = float(pl.min())
@@ -128,7 +130,6 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     z = np.concatenate([[0.0], np.cumsum(pl)])
     delta = np.concatenate([[0.0], np.cumsum(pl - p_b)])
     delta_n = float(delta[-1])
-    base = np.arange(n) * p_b
     prof = getattr(ThreadProfiles.from_design(design), part)
     t = float(prof.tooth_half_width(prof.pitch_radius))
     loaded = {"roller": {"lower": "nut", "upper": "screw"}, "nut": {"lower": "-", "upper": "roller"}}[part]
@@ -202,6 +203,11 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
         "thread_starts": {"roller": 1, "nut": design.nut.starts}[part],
         "indexing": INDEXING if part == "nut" and design.nut.starts > 1 else "single start",
     }
+    if inspection is not None:
+        header["inspection"] = (
+            f"{inspection['gauge']} diameter {inspection['gauge_diameter_mm']:.6f} mm, measurement M = "
+            f"{inspection['measurement_mm']:.6f} mm at 20 degC "
+            f"({inspection['temperature_coefficient_um_per_k']:.3f} um/K); {inspection['method']}")
     return MachiningSheet(part, header, rows, start_table(design, part))
 
 
@@ -214,12 +220,4 @@ def machining_sheets(design: PRSDesign, contact: ContactResult | None = None,
     contact = contact if contact is not None else analyse_contact(design)
     nz = {"screw": abs(contact.screw_roller["upper_at_theoretical"].normal[2]),
           "nut": abs(contact.roller_nut["lower"].normal[2])}
-    sheets = {part: machining_sheet(design, part, nz) for part in ("roller", "nut")}
-    for part, sh in sheets.items():
-        rep = (inspection or {}).get(part)
-        if rep is not None:
-            sh.header["inspection"] = (
-                f"{rep['gauge']} diameter {rep['gauge_diameter_mm']:.6f} mm, measurement M = "
-                f"{rep['measurement_mm']:.6f} mm at 20 degC ({rep['temperature_coefficient_um_per_k']:.3f} um/K); "
-                f"{rep['method']}")
-    return sheets
+    return {part: machining_sheet(design, part, nz, (inspection or {}).get(part)) for part in ("roller", "nut")}

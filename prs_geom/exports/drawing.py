@@ -53,7 +53,7 @@ from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.geometry.sections import axial_section
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.io import dumps_toml
+from prs_geom.model.io import design_hash
 
 PARTS = ("screw", "roller", "nut")
 LAYERS = {"OUTLINE": (7, "Continuous", 50), "CENTER": (1, "CENTER", 25), "DIMENSIONS": (3, "Continuous", 25),
@@ -75,11 +75,6 @@ DRAWING_PDF = "drawings.pdf"
 
 def drawing_name(part: str) -> str:
     return f"drawing_{part}.dxf"
-
-
-def design_hash(design: PRSDesign) -> str:
-    """First 12 hex digits of the sha256 of the design's TOML text."""
-    return hashlib.sha256(dumps_toml(design).encode("utf-8")).hexdigest()[:12]
 
 
 # --------------------------------------------------------------------------- geometry

@@ -29,7 +29,7 @@ from prs_geom.analysis.loads import LoadsResult
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.io import design_to_dict
+from prs_geom.model.io import design_hash, design_to_dict
 
 #: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
 DISPLAY_TOLERANCE_MM = 0.1
@@ -107,14 +107,6 @@ def _svg(text: str) -> str:
     return text[text.index("<svg"):]
 
 
-def _design_hash(design: PRSDesign) -> str:
-    """First 12 hex digits of the sha256 of the design's TOML text (as on the drawings)."""
-    import hashlib
-
-    from prs_geom.model.io import dumps_toml
-    return hashlib.sha256(dumps_toml(design).encode("utf-8")).hexdigest()[:12]
-
-
 def _checks_html(checks: dict[str, Any], contact: ContactResult | None) -> str:
     """Interference, FCL verification and per-tooth gaps, as measured."""
     out = ["<h2 id='checks'>Checks</h2>"]
@@ -166,7 +158,7 @@ def _flank_text(tol: dict[str, Any]) -> Any:
 def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     """The tolerance section: error model, quantiles per load, roller share, importance, plot."""
     tol = t["tolerances"]
-    out = [f"<h2 id='tolerance'>Tolerances and load sharing</h2>",
+    out = ["<h2 id='tolerance'>Tolerances and load sharing</h2>",
            f"<p class='note'>{t['samples']} Monte Carlo samples (seed {t['seed']}), all rollers side by "
            f"side; {html.escape(tol['distribution'])} errors; source: {html.escape(tol['source'])}.</p>",
            _table([["flank position (um)", _flank_text(tol)], ["roller pitch diameter (um)", tol["roller_diameter_um"]],
@@ -203,7 +195,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     """
     parts = [f"<h1>Planetary roller screw '{html.escape(design.name)}'</h1>",
              f"<p class='note' id='provenance'>prs_geom {html.escape(version)}; {html.escape(date)}; "
-             f"design sha256 {_design_hash(design)}. Units mm, N, MPa; tooth 1 at the loaded end.</p>",
+             f"design sha256 {design_hash(design)}. Units mm, N, MPa; tooth 1 at the loaded end.</p>",
              "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
              + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
              if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",

@@ -274,6 +274,23 @@ def decode_text(raw: bytes, source: str) -> str:
 
 
 # --------------------------------------------------------------------------- files
+def read_input_text(path: Path, what: str) -> str:
+    """The UTF-8 text (:func:`decode_text`) of an input file the user named.
+
+    A path that does not exist or is a folder is a :class:`DesignError` on ``what`` (e.g.
+    "design file"; bad input, exit 2); a file that exists but cannot be read is an
+    :class:`EnvironmentFailure` (exit 3)."""
+    if not path.exists():
+        raise DesignError(what, str(path), "does not exist")
+    if path.is_dir():
+        raise DesignError(what, str(path), f"is a folder, not a {what}")
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
+    return decode_text(raw, str(path))
+
+
 def load_design(path: str | Path, kinds: dict[str, type] | None = None) -> PRSDesign:
     """Read a design from a ``.toml`` or ``.json`` file (UTF-8, with or without BOM).
 
@@ -282,15 +299,7 @@ def load_design(path: str | Path, kinds: dict[str, type] | None = None) -> PRSDe
     """
     path = Path(path)
     source = str(path)
-    if not path.exists():
-        raise DesignError("design file", str(path), "does not exist")
-    if path.is_dir():
-        raise DesignError("design file", str(path), "is a folder, not a design file")
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
-    text = decode_text(raw, source)
+    text = read_input_text(path, "design file")
     if path.suffix.lower() == ".json":
         return loads_json(text, source, kinds)
     return loads_toml(text, source, kinds)
@@ -353,15 +362,7 @@ def load_spectrum(path: str | Path):
     (UTF-8); errors name the file, the case and the key."""
     from prs_geom.model.spectrum import spectrum_from_dict
     path = Path(path)
-    if not path.exists():
-        raise DesignError("spectrum file", str(path), "does not exist")
-    if path.is_dir():
-        raise DesignError("spectrum file", str(path), "is a folder, not a spectrum file")
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
-    text = decode_text(raw, str(path))
+    text = read_input_text(path, "spectrum file")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -370,3 +371,11 @@ def load_spectrum(path: str | Path):
         return spectrum_from_dict(data)
     except DesignError as exc:
         raise DesignError(f"spectrum file {str(path)!r}: {exc.field}", exc.value, exc.rule) from None
+
+
+def design_hash(design) -> str:
+    """The first 12 hex digits of the sha256 of the design's TOML text (:func:`dumps_toml`):
+    the short identity the drawings' title blocks and report.html print."""
+    import hashlib
+
+    return hashlib.sha256(dumps_toml(design).encode("utf-8")).hexdigest()[:12]
