@@ -10,9 +10,9 @@ each as a ratio to the vectorised solve of all 200 contacts of the default desig
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
+
+from timing import best_time
 
 from prs_geom.analysis.contact import ContactBatch, solve_collinear, tooth_contacts
 from prs_geom.model.design import default_design
@@ -26,15 +26,6 @@ def tile(batch: ContactBatch, q0: np.ndarray, reps: int):
     return ContactBatch(batch.A, batch.B, **f), np.tile(q0, (reps, 1))
 
 
-def best(fn, repeats=5):
-    t = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return min(t)
-
-
 def main() -> None:
     d = load_design(__import__("pathlib").Path(__file__).parent.parent / "examples" / "graded-pitch.toml")
     batch, q0, _ = tooth_contacts(d, "screw", "upper")
@@ -42,21 +33,21 @@ def main() -> None:
     one = [tile(ContactBatch(batch.A, batch.B, *[getattr(batch, k)[i:i + 1] for k in
                              ("m_a", "xi_a", "m_b", "xi_b", "ox", "oy", "alpha", "z_offset")]), q0[i:i + 1], 1)
            for i in range(n0)]
-    t_scalar = best(lambda: [solve_collinear(b, q) for b, q in one], 3)
+    t_scalar = best_time(lambda: [solve_collinear(b, q) for b, q in one], 3)
     print(f"baseline: one contact per call: {n0 / t_scalar:10.0f} solves/s")
     print(f"{'contacts':>9} {'solves/s':>12} {'x baseline':>11}")
     t_200 = None
     for reps in (1, 10, 100):
         b, q = tile(batch, q0, reps)
-        t = best(lambda: solve_collinear(b, q))
+        t = best_time(lambda: solve_collinear(b, q))
         if reps == 1:
             t_200 = t
         print(f"{b.n:9d} {b.n / t:12.0f} {(b.n / t) / (n0 / t_scalar):11.1f}")
     dd = default_design()
-    t_fcl = best(lambda: verify_contacts(dd, 0.001), 3)
+    t_fcl = best_time(lambda: verify_contacts(dd, 0.001), 3)
     print(f"full FCL verification (default design): {t_fcl:.3f} s = {t_fcl / t_200:.0f} x the vectorised "
           f"solve of all {n0} contacts")
-    t_int = best(lambda: interference(dd, "corrected"), 1)
+    t_int = best_time(lambda: interference(dd, "corrected"), 1)
     print(f"interference check (corrected screw, 2 um meshes): {t_int:.2f} s = {t_int / t_200:.0f} x")
 
 

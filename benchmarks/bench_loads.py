@@ -15,23 +15,13 @@ Prints (medians of several repeats, as ratios; absolute times only for orientati
 """
 from __future__ import annotations
 
-import statistics
-import time
-
 import numpy as np
 
 from prs_geom.model.design import PRSDesign, Thread, default_design
+from timing import median_time
+
 from prs_geom.analysis.loads import (build_model, forward, gap_terms, gap_terms_rollers, loads_report, solve_loads,
                                      solve_loads_batch, solve_loads_rollers)
-
-
-def median_time(fn, repeats=7):
-    t = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return statistics.median(t)
 
 
 def design(n: int) -> PRSDesign:

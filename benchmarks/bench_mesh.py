@@ -12,10 +12,11 @@ practical floor for any vectorised mesher. Each figure is the best of several ru
 from __future__ import annotations
 
 import gc
-import time
 import tracemalloc
 
 import numpy as np
+
+from timing import best_time
 
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import default_design
@@ -36,16 +37,6 @@ def numpy_fill(nv: int, nf: int) -> None:
     np.add(np.arange(nf)[:, None], np.arange(3)[None, :], out=F)
 
 
-def best_of(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        gc.collect()
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
-
-
 def main() -> None:
     d = default_design()
     print(f"{'tol_um':>7} {'triangles':>10} {'build_s':>8} {'Mtri/s':>7} {'s/Mtri':>7} "
@@ -55,8 +46,8 @@ def main() -> None:
         nv, nf = len(V), len(F)
         del V, F
         repeats = 5 if tol >= 0.001 else 3
-        t_build = best_of(lambda: build(d, tol), repeats)
-        t_fill = best_of(lambda: numpy_fill(nv, nf), repeats)
+        t_build = best_time(lambda: build(d, tol), repeats, collect=True)
+        t_fill = best_time(lambda: numpy_fill(nv, nf), repeats, collect=True)
         gc.collect()
         tracemalloc.start()
         build(d, tol)

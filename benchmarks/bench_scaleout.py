@@ -18,9 +18,10 @@ second shows the warm pool.
 from __future__ import annotations
 
 import sys
-import time
 
 import numpy as np
+
+from timing import run_timed
 
 from prs_geom.model.design import default_design
 from prs_geom.scaleout import available_cpus, plan_chunks, run_chunks, spawn_seeds
@@ -39,12 +40,6 @@ def study_chunk(payload):
     return out
 
 
-def timed(fn):
-    t0 = time.perf_counter()
-    res = fn()
-    return time.perf_counter() - t0, res
-
-
 def main() -> None:
     dask = "--dask" in sys.argv[1:]
     n = available_cpus()
@@ -57,7 +52,7 @@ def main() -> None:
     print(f"synthetic study: {len(chunks)} chunks x 25 solves of {SIZE} x {SIZE}, {n} CPUs")
     ref = None
     for label, kw in runs:
-        t, res = timed(lambda: run_chunks(study_chunk, payloads, **kw))
+        (t,), res = run_timed(lambda: run_chunks(study_chunk, payloads, **kw))
         ref = ref if ref is not None else (t, res)
         same = all(np.array_equal(a, b) for a, b in zip(res, ref[1]))
         print(f"  {label:<22} {t:7.2f} s  x{ref[0] / t:5.2f}  bit-identical: {same}")
@@ -66,7 +61,7 @@ def main() -> None:
     axes = {"starts": [4, 5], "rollers": [6, 8, 10], "pitch_mm": [1.5, 2.0], "teeth": [10, 20, 30, 40]}
     ref = None
     for label, kw in runs:
-        t, res = timed(lambda: sweep(default_design(), **axes, **kw))
+        (t,), res = run_timed(lambda: sweep(default_design(), **axes, **kw))
         ref = ref if ref is not None else (t, res)
         print(f"  {label:<22} {t:7.2f} s  x{ref[0] / t:5.2f}  bit-identical: {res.csv_text() == ref[1].csv_text()}"
               f"  ({res.count('ok')} valid)")

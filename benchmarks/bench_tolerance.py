@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import statistics
 import sys
-import time
 
 import numpy as np
+
+from timing import run_timed
 
 from prs_geom import studies
 from prs_geom.analysis import tolerance as T
@@ -27,12 +28,9 @@ from prs_geom.scaleout import available_cpus
 
 
 def timed(fn, repeats=3):
-    out, t = None, []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        t.append(time.perf_counter() - t0)
-    return statistics.median(t), out
+    """Median seconds of ``repeats`` calls and the last result."""
+    times, out = run_timed(fn, repeats)
+    return statistics.median(times), out
 
 
 def main(samples: int = 2000) -> None:
