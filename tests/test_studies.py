@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from prs_geom import studies
-from prs_geom.analysis import tolerance as T
 from prs_geom.analysis.contact import analyse_contact
 from prs_geom.analysis.loads import build_model, design_pitches, with_pitch_lists
 from prs_geom.analysis.robust import weighted_quantile

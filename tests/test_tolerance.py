@@ -28,15 +28,6 @@ from prs_geom import studies
 from cli_helpers import run as _run
 
 
-class _Result:
-    def __init__(self, argv):
-        self.returncode, self.stdout, self.stderr = _run(list(argv))
-
-
-def run(*argv):
-    return _Result(argv)
-
-
 @pytest.fixture(scope="module")
 def graded():
     d = default_design()
@@ -160,11 +151,12 @@ def test_median_worst_ldc_grows_with_tolerance(graded):
 
 
 def test_cli_zero_tolerance_reproduces_loads(tmp_path):
-    r = run("tolerance", "--flank-um", "0", "--samples", "3", "--load-fraction", "0.5", "1", "--json")
-    assert r.returncode == 0, r.stderr
-    out = json.loads(r.stdout)
+    code, stdout, stderr = _run(["tolerance", "--flank-um", "0", "--samples", "3", "--load-fraction", "0.5", "1",
+                                 "--json"])
+    assert code == 0, stderr
+    out = json.loads(stdout)
     assert out["samples"] == 3 and out["seed"] == 0
-    loads = json.loads(run("loads", "--json").stdout)
+    loads = json.loads(_run(["loads", "--json"])[1])
     assert abs(out["cases"][1]["worst_ldc"]["max"] - loads["max_ldc"]) < 1e-12
     assert abs(out["cases"][1]["worst_ldc"]["median"] - loads["max_ldc"]) < 1e-12
     half = [row for row in loads["off_design"] if row["load_fraction"] == 0.5][0]
@@ -173,17 +165,17 @@ def test_cli_zero_tolerance_reproduces_loads(tmp_path):
 
 
 def test_cli_errors_name_the_flag(tmp_path):
-    r = run("tolerance", "--flank-um", "-1")
-    assert r.returncode == 2 and "--flank-um = -1" in r.stderr
-    r = run("tolerance", "--eccentricity-um", "500")
-    assert r.returncode == 2 and "--eccentricity-um = 500" in r.stderr
-    r = run("tolerance", "--out", str(tmp_path / "x.toml"))
-    assert r.returncode == 2 and "--target-ldc" in r.stderr
+    code, _, err = _run(["tolerance", "--flank-um", "-1"])
+    assert code == 2 and "--flank-um = -1" in err
+    code, _, err = _run(["tolerance", "--eccentricity-um", "500"])
+    assert code == 2 and "--eccentricity-um = 500" in err
+    code, _, err = _run(["tolerance", "--out", str(tmp_path / "x.toml")])
+    assert code == 2 and "--target-ldc" in err
     assert not (tmp_path / "x.toml").exists()
     bad = tmp_path / "spec.toml"
     bad.write_text("[[case]]\nload_n = 1000.0\ntime_share = 0.5\n", encoding="utf-8")
-    r = run("tolerance", "--spectrum", str(bad))
-    assert r.returncode == 2 and "time_share" in r.stderr and "sum to 1" in r.stderr
+    code, _, err = _run(["tolerance", "--spectrum", str(bad)])
+    assert code == 2 and "time_share" in err and "sum to 1" in err
 
 
 def test_importance_ranks_the_dominant_term(graded):
