@@ -204,7 +204,7 @@ def stage_meshes(ctx: BuildContext) -> None:
     for i, (name, tm) in enumerate(asm.parts.items()):
         graded = not tm.warp.is_identity
         vol = None if graded else analytic_thread_volume(
-            tm.profile, lengths[name], tm.body_radius)
+            tm.profile, lengths[name], tm.body_radius) - tm.datum_mark.volume
         rows.append(mesh_report(tm, vol))
         ctx.progress("mesh checks", i + 1, len(asm.parts))
     ctx.meshes = MeshStage(asm, rows)

@@ -74,6 +74,8 @@ def test_dimension_measurements_are_the_design_values(drawings):
     assert expected["roller"]["<> (included flank angle)"] == pytest.approx(90.0, abs=1e-9)
     assert contact.theoretical_screw_pitch_diameter_mm < d.screw.pitch_diameter_mm - 1e-4
     for part, doc in docs.items():
+        # the angular datum slot B: its depth, a quarter pitch by the sizing rule
+        expected[part]["<> (slot B depth)"] = 0.25 * p
         dims = _dims(doc)
         assert set(dims) == set(expected[part]), part
         for text, value in expected[part].items():
@@ -183,3 +185,50 @@ def test_pdf_has_one_non_empty_page_per_part(drawings, tmp_path):
     assert len(pages) == 3
     for page in pages:
         assert _pgm_ink(page) > 0.005, page
+
+
+def test_datum_slot_b_in_the_drawing_is_the_slot_cut_in_the_mesh(drawings):
+    """The notch of face A in the theta = 0 outline is the slot of the part mesh: the same
+    corners in the drawing, and in the mesh a point inside the slot is outside the solid
+    while the same point moved by the slot width sideways (y) is inside it."""
+    from prs_geom.exports.drawing import part_datum_mark, part_profiles
+    from prs_geom.mesh.assembly import build_part
+
+    d, contact, _, _, docs = drawings
+    for part, doc in docs.items():
+        profile = part_profiles(d, contact)[part]
+        mark = part_datum_mark(d, part, profile)
+        pts = set()
+        for e in doc.modelspace():
+            if e.dxf.layer == "OUTLINE":
+                pts |= {(round(x, 12), round(y, 12)) for x, y, *_ in e.get_points("xy")}
+        corners = [(mark.z_face, mark.r_inner), (mark.z_face + mark.depth, mark.r_inner),
+                   (mark.z_face + mark.depth, mark.r_outer), (mark.z_face, mark.r_outer)]
+        assert all((round(x, 12), round(y, 12)) in pts for x, y in corners), part
+        # the lower outline (theta = 180 deg) has no slot
+        assert (round(mark.z_face + mark.depth, 12), round(-mark.r_inner, 12)) not in pts
+        tm = build_part(d, part, screw_profile=contact.screw_profile if part == "screw" else None)
+        assert tm.datum_mark == mark
+        centre = np.array([0.5 * (mark.r_inner + mark.r_outer), 0.0, mark.z_face + 0.5 * mark.depth])
+        probes = [centre, centre + [0.0, mark.width, 0.0], centre + [0.0, -mark.width, 0.0],
+                  centre + [0.0, 0.0, mark.depth]]
+        assert [_inside(tm.vertices, tm.faces, q) for q in probes] == [False, True, True, True], part
+
+
+def _inside(V: np.ndarray, F: np.ndarray, q: np.ndarray) -> bool:
+    """Point in a closed mesh by ray parity (Moller-Trumbore), along a skew direction that
+    meets no edge or vertex of these meshes."""
+    d = np.array([0.31, 0.17, -0.93])
+    d /= np.linalg.norm(d)
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    e1, e2 = b - a, c - a
+    h = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, h)
+    ok = np.abs(det) > 1e-15
+    s_ = q - a
+    u = np.einsum("ij,ij->i", s_, h) / np.where(ok, det, 1.0)
+    qv = np.cross(s_, e1)
+    v = (qv @ d) / np.where(ok, det, 1.0)
+    t = np.einsum("ij,ij->i", e2, qv) / np.where(ok, det, 1.0)
+    hits = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    return bool(hits.sum() % 2)

@@ -48,6 +48,10 @@ def test_report_loads_without_errors_and_viewer_draws(report_html, tmp_path):
     assert 'data-viewer="ok"' in body
     assert "data-errors" not in body
     assert "data-triangles" in body
+    # drawn by WebGL with a depth buffer (per-pixel occlusion: no painter's-sort streaks)
+    assert 'data-renderer="webgl2"' in body
+    depth_bits = int(body.split('data-depth-bits="')[1].split('"')[0])
+    assert depth_bits >= 16
 
 
 def test_3d_view_is_not_blank(report_html, tmp_path):
@@ -89,3 +93,39 @@ def test_3d_view_fits_the_window_without_clipping(report_html, tmp_path, size):
     img = np.asarray(Image.open(shot).convert("RGB")).astype(float)
     green = (img[:, :, 1] > img[:, :, 0] + 15) & (img[:, :, 1] > img[:, :, 2] + 15)
     assert green.mean() > 0.005                                     # the rollers are in the shot
+
+
+def test_three_js_is_embedded_unmodified_with_its_licence(report_html):
+    """The vendored three.js files are the bytes MANIFEST.json recorded from the npm package
+    (sha256), the page embeds exactly those bytes, and carries the MIT licence text."""
+    import base64
+    import hashlib
+    import json
+    import re
+    from importlib import resources
+
+    folder = resources.files("prs_geom.exports").joinpath("vendor", "three")
+    manifest = json.loads(folder.joinpath("MANIFEST.json").read_text())
+    assert manifest["package"] == "three" and manifest["integrity"].startswith("sha512-")
+    for name, entry in manifest["files"].items():
+        assert hashlib.sha256(folder.joinpath(name).read_bytes()).hexdigest() == entry["sha256"], name
+    text = report_html.read_text()
+    imports = json.loads(re.search(r"<script type='importmap'>(.*?)</script>", text, re.S).group(1))["imports"]
+    embedded = base64.b64decode(imports["three"].split(",", 1)[1])
+    assert embedded == folder.joinpath("three.module.min.js").read_bytes()
+    assert "Permission is hereby granted, free of charge" in text and manifest["version"] in text
+
+
+@pytest.mark.skipif(shutil.which("npm") is None, reason="npm not installed")
+def test_vendored_three_js_equals_the_npm_package():
+    """tools/vendor_three.py --check fetches the pinned tarball again (npm verifies its
+    integrity) and compares every vendored file byte for byte."""
+    import sys
+    from pathlib import Path
+
+    tool = Path(__file__).parent.parent / "tools" / "vendor_three.py"
+    r = subprocess.run([sys.executable, str(tool), "--check"], capture_output=True, text=True, timeout=300)
+    if r.returncode != 0 and ("ENOTFOUND" in r.stderr or "EAI_AGAIN" in r.stderr or "ECONNREFUSED" in r.stderr):
+        pytest.skip("the npm registry is not reachable: " + r.stderr.strip().splitlines()[-1])
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "equals the npm package" in r.stdout

@@ -14,7 +14,7 @@ from prs_geom.analysis.contact import PartFlanks
 from prs_geom.model.design import PRSDesign, Roller, Nut, Screw, Thread, default_design
 from prs_geom.model.io import load_design
 from prs_geom.model.errors import DesignError
-from prs_geom.mesh.thread import (FACE_THREAD, analytic_thread_volume, axial_line_crossings,
+from prs_geom.mesh.thread import (FACE_BODY, FACE_END_HI, FACE_END_LO, FACE_MARK, FACE_THREAD, analytic_thread_volume, axial_line_crossings,
                            manifold_status, measure_deviation, mesh_report, profile_distance)
 from strategies import standard_designs
 
@@ -48,9 +48,12 @@ def reference_volume(tm, n_theta=20000, n_u=200001):
     bumps = (Gint(tm.z_hi - mid) - Gint(tm.z_lo - mid)).sum(1)
     lz = tm.z_hi - tm.z_lo
     inner = 0.5 * np.mean(rr ** 2 * lz + bumps) * 2 * math.pi
+    # the angular datum slot is a box wholly inside the solid: width x depth x radial length
+    slot = 0.0 if tm.datum_mark is None else tm.datum_mark.width * tm.datum_mark.depth * (
+        tm.datum_mark.r_outer - tm.datum_mark.r_inner)
     if prof.internal:
-        return math.pi * tm.body_radius ** 2 * lz - inner
-    return inner
+        return math.pi * tm.body_radius ** 2 * lz - inner - slot
+    return inner - slot
 
 
 def check_part(tm, tol):
@@ -77,7 +80,7 @@ def test_default_parts_closed_accurate_and_of_right_volume(part, tol):
     m, ref = check_part(tm, tol)
     # the tabulated reference agrees with the closed-form thread volume
     length = {"screw": d.screw.length_mm}.get(part, thread_length(d))
-    closed = analytic_thread_volume(tm.profile, length, tm.body_radius)
+    closed = analytic_thread_volume(tm.profile, length, tm.body_radius) - tm.datum_mark.volume
     assert ref == pytest.approx(closed, rel=1e-8)
 
 
@@ -179,9 +182,13 @@ def test_tessellation_follows_tolerance():
 def test_end_faces_are_planar_and_contain_corner_points(part):
     tm = build_part(default_design(), part, 0.01)
     prof = tm.profile
-    cap = tm.face_kind != FACE_THREAD
+    cap = np.isin(tm.face_kind, [FACE_END_LO, FACE_END_HI, FACE_BODY])
     z = tm.vertices[tm.faces[cap]][:, :, 2]
     assert set(np.unique(z)) == {tm.z_lo, tm.z_hi}
+    # the datum slot's faces lie in face A or inside the slot box
+    mark = tm.datum_mark
+    zm = tm.vertices[tm.faces[tm.face_kind == FACE_MARK]][:, :, 2]
+    assert set(np.unique(zm)) == {tm.z_lo, tm.z_lo + mark.depth}
     lo_verts = tm.vertices[np.unique(tm.faces[tm.face_kind == 1])]
     # every profile corner helix crosses the end plane exactly at a vertex of the end face
     corners_u = prof.corner_offsets()

@@ -21,7 +21,8 @@ unit contact normal from the contact solver (roller lower flank and nut flanks: 
 contact; roller upper flank: screw-roller contact with the theoretical screw).
 
 Datums: A, the loaded-side end face (z = 0 of the part frame, a physical face of both
-parts), and B, the angular reference mark at theta = 0. Every position on the sheet is a
+parts), and B, the mid-plane of the radial slot cut into A at theta = 0
+(:mod:`prs_geom.geometry.datum`). Every position on the sheet is a
 flank's axial position at the pitch diameter, at theta = 0, from A: designed, and on the base
 cut (tooth 1's mid-plane lies p/2 from A on the roller and on A on the nut, so the nut's
 tooth 1 lower flank is not on the part there: ``on_part`` marks it); the axial shift
@@ -41,6 +42,7 @@ import numpy as np
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.model.design import PRSDesign
+from prs_geom.geometry.datum import datum_mark
 from prs_geom.geometry.profiles import ThreadProfiles
 
 COLUMNS = [
@@ -181,13 +183,15 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
         if tol.target_ldc is not None:
             tol_text += f" (target worst LDC {tol.target_ldc:g}, confidence {tol.confidence:g}, seed {tol.seed})"
     alpha = getattr(design.materials, part).thermal_expansion_per_k
+    mark = datum_mark(prof, 0.0, 0.5 * design.nut.outer_diameter_mm if prof.internal else None)
     header = {
         "part": part,
         "design": design.name,
         "units": "lengths mm, shifts, deviations and stock um; all at 20 degC",
-        "datum": "A: the loaded-side end face (tooth 1 end, z = 0 of the part frame); B: the angular "
-                 "reference mark at theta = 0; every position is the flank's axial distance from A at the "
-                 "pitch diameter, at theta = 0",
+        "datum": "A: the loaded-side end face (tooth 1 end, z = 0 of the part frame); B: the mid-plane of "
+                 f"the radial slot in face A at theta = 0 ({mark.width:g} mm wide, {mark.depth:g} mm deep, radius "
+                 f"{mark.r_inner:.3f} to {mark.r_outer:.3f} mm); every position is the flank's axial distance "
+                 "from A at the pitch diameter, at theta = 0",
         "base_pitch_mm": p_b,
         "base_tooth_thickness_stock_um": delta_n * 1e3,
         "pitch_diameter_mm": 2.0 * prof.pitch_radius,

@@ -22,7 +22,9 @@ Model space (X along the part axis from the loaded end, Y the radius, mm):
   the closed outline);
 * the datum feature symbol A on the loaded-side end face (X = 0 for roller and nut; the
   screw's thread is centred on the nut, so its datum face is its loaded-side end, stated in
-  a note) and a note for the angular datum B (mark at theta = 0 on face A).
+  a note) and B on the angular datum slot (:mod:`prs_geom.geometry.datum`), which the
+  section at theta = 0 cuts through its mid-plane: a notch in face A of the upper outline,
+  its depth dimensioned, its width and radial extent in a note.
 
 Paper space: one ISO A3 landscape layout (420 x 297 mm) with a border (20 mm filing margin,
 10 mm elsewhere), the section viewport at 2:1, 1:1 or 1:2 (the largest that fits), the
@@ -48,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from prs_geom._version import __version__
+from prs_geom.geometry.datum import DatumMark, datum_mark
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
 from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
@@ -123,10 +126,20 @@ def section_outlines(design: PRSDesign, part: str, profile: ThreadProfile) -> li
     half_lead = 0.5 * profile.lead * design.thread.hand_sign
     top = _profile_points(profile, warp, first, lo, hi)
     bot = [(x, -y) for x, y in _profile_points(profile, warp, first + half_lead, lo, hi)]
+    mark = part_datum_mark(design, part, profile)
+    x_floor = lo + mark.depth
+    # the datum slot B lies in the theta = 0 half-plane: a notch in face A of the upper outline
+    notch_up = [(lo, mark.r_inner), (x_floor, mark.r_inner), (x_floor, mark.r_outer), (lo, mark.r_outer)]
     if not profile.internal:
-        return [top + bot[::-1]]
+        return [notch_up + top + bot[::-1]]
     rb = 0.5 * design.nut.outer_diameter_mm
-    return [top + [(hi, rb), (lo, rb)], bot + [(hi, -rb), (lo, -rb)]]
+    return [top + [(hi, rb), (lo, rb)] + notch_up[::-1], bot + [(hi, -rb), (lo, -rb)]]
+
+
+def part_datum_mark(design: PRSDesign, part: str, profile: ThreadProfile) -> DatumMark:
+    """The angular datum slot B of a drawn part (the one cut into its mesh)."""
+    body = 0.5 * design.nut.outer_diameter_mm if profile.internal else None
+    return datum_mark(profile, z_range(design, part)[0], body)
 
 
 def flank_x(design: PRSDesign, part: str, profile: ThreadProfile, tooth: int, r: float) -> float:
@@ -262,18 +275,33 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     msp.add_circle((xm, ym), radius=0.8 * p, dxfattribs={"layer": "TEXT"})
     msp.add_text("A", height=TEXT_H * k, dxfattribs={"layer": "TEXT"}).set_placement(
         (xm + 0.8 * p, ym + 0.8 * p))
-    face = 0.0 if part != "screw" else lo
-    y0 = 0.5 * rr if not profile.internal else 0.5 * (rr + outer)
+    face = lo
+    mark = part_datum_mark(design, part, profile)
+    # datum A on the face clear of the slot (inside it for external parts, outside for the nut)
+    y0 = 0.5 * mark.r_inner if not profile.internal else 0.5 * (rr + mark.r_inner)
     h = 3.0 * k
+    b = 6.0 * k
+
+    def datum_box(letter: str, x_leader: float, y: float) -> None:
+        xa = x_leader - b
+        msp.add_lwpolyline([(xa, y - 0.5 * b), (xa + b, y - 0.5 * b), (xa + b, y + 0.5 * b), (xa, y + 0.5 * b)],
+                           close=True, dxfattribs={"layer": "TEXT"})
+        msp.add_text(letter, height=TEXT_H * k, dxfattribs={"layer": "TEXT"}).set_placement(
+            (xa + 0.5 * b, y), align=_align("MIDDLE_CENTER"))
+
     msp.add_lwpolyline([(face, y0 - 0.5 * h), (face, y0 + 0.5 * h), (face - 0.866 * h, y0)], close=True,
                        dxfattribs={"layer": "TEXT"})
     msp.add_line((face - 0.866 * h, y0), (face - 8.0 * k, y0), dxfattribs={"layer": "TEXT"})
-    b = 6.0 * k
-    xa = face - 8.0 * k - b
-    msp.add_lwpolyline([(xa, y0 - 0.5 * b), (xa + b, y0 - 0.5 * b), (xa + b, y0 + 0.5 * b), (xa, y0 + 0.5 * b)],
+    datum_box("A", face - 8.0 * k, y0)
+    # datum B: the slot at theta = 0, its floor carrying the triangle, its depth dimensioned
+    x_floor, y_mid = face + mark.depth, 0.5 * (mark.r_inner + mark.r_outer)
+    hb = min(h, 0.8 * (mark.r_outer - mark.r_inner))
+    msp.add_lwpolyline([(x_floor, y_mid - 0.5 * hb), (x_floor, y_mid + 0.5 * hb), (x_floor - 0.866 * hb, y_mid)],
                        close=True, dxfattribs={"layer": "TEXT"})
-    msp.add_text("A", height=TEXT_H * k, dxfattribs={"layer": "TEXT"}).set_placement(
-        (xa + 0.5 * b, y0), align=_align("MIDDLE_CENTER"))
+    msp.add_line((x_floor - 0.866 * hb, y_mid), (face - 8.0 * k, y_mid), dxfattribs={"layer": "TEXT"})
+    datum_box("B", face - 8.0 * k, y_mid)
+    msp.add_linear_dim(base=(face, mark.r_outer + 4.0 * k), p1=(face, mark.r_outer), p2=(x_floor, mark.r_outer),
+                       text="<> (slot B depth)", override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
     # -- DETAIL A: normal section of one tooth, in its own region of model space
     dx = hi + (MAIN_VP[2] - MAIN_VP[0]) * k + 50.0     # beyond the section viewport's window
     tooth, rb = _normal_tooth(profile)
@@ -333,7 +361,8 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
       dxfattribs={"layer": "TEXT"}).set_placement((dx0, dy1 + 3.0))
     notes = ["Datum A: loaded-side end face (tooth 1 end, z = 0)" if part != "screw" else
              f"Datum A: loaded-side end face; nut tooth 1 end (z = 0) is {-lo:g} mm from it",
-             "Angular datum B: mark at theta = 0 on face A (section plane, +Y side)",
+             f"Angular datum B: slot {mark.width:g} wide x {mark.depth:g} deep in face A, radius "
+             f"{mark.r_inner:.3f} to {mark.r_outer:.3f}; its mid-plane is theta = 0 (+Y side here)",
              f"Teeth numbered from datum A; {design.thread.hand} hand, {profile.starts} start(s)"]
     if part == "screw":
         notes.append(f"Pitch dia. is the theoretical {2 * rp:.6f} mm (nominal {design.screw.pitch_diameter_mm:g})")

@@ -1,12 +1,13 @@
 """Self-contained HTML report (``report.html``): one file, no server, no network.
 
 Sections: design table, contact results, load-distribution plots (inline SVG), machining
-tables, and an interactive 3D view of the assembly. The 3D view is a small Canvas-2D
-renderer written here (orthographic projection, back-face culling, painter's sort, Lambert
-shading; drag to rotate, wheel to zoom): it needs no WebGL, so it works in any browser,
-headless ones included. Its mesh is a display tessellation of the assembly (coarser than
-the export meshes; the tolerance is stated on the page), embedded as base64 float32/uint32
-arrays, one mesh per distinct part and one transform per placed part.
+tables, and an interactive 3D view of the assembly. The 3D view is three.js (WebGL with a
+depth buffer, so no sorting seams; flat shading; the nut cut open by a clipping plane through
+the axis facing the viewer; drag to rotate, wheel to zoom, right-drag to pan), embedded
+unmodified from its npm package as ``data:`` URLs in an import map (:func:`three_js`), so
+the page still fetches nothing. Its mesh is a display tessellation of the assembly (coarser
+than the export meshes; the tolerance is stated on the page), embedded as base64
+float32/uint32 arrays, one mesh per distinct part and one transform per placed part.
 
 When the view has drawn its first frame it sets ``data-viewer="ok"`` and
 ``data-triangles`` on ``<body>``; script errors are collected in ``#errors`` and
@@ -18,6 +19,7 @@ import base64
 import html
 import json
 import re
+from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -59,6 +61,27 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM) -> dict[
 
 
 
+
+
+@lru_cache(maxsize=1)
+def three_js() -> dict[str, str]:
+    """three.js as report.html embeds it: an import map of ``data:`` URLs for ``three`` and
+    its OrbitControls, the version and the licence text.
+
+    The files are package data in ``prs_geom/exports/vendor/three``, fetched unmodified from
+    the npm package by ``tools/vendor_three.py`` (which records their sha256 in
+    ``MANIFEST.json``; the test suite checks them against it).
+    """
+    folder = resources.files("prs_geom.exports").joinpath("vendor", "three")
+    manifest = json.loads(folder.joinpath("MANIFEST.json").read_text(encoding="utf-8"))
+
+    def url(name: str) -> str:
+        return "data:text/javascript;base64," + base64.b64encode(folder.joinpath(name).read_bytes()).decode("ascii")
+
+    imports = {"three": url("three.module.min.js"),
+               "three/addons/controls/OrbitControls.js": url("OrbitControls.js")}
+    return {"importmap": json.dumps({"imports": imports}), "version": manifest["version"],
+            "licence": folder.joinpath("LICENSE").read_text(encoding="utf-8")}
 
 
 def _table(rows: list[list[Any]], header: list[str] | None = None, full: bool = False) -> str:
@@ -256,8 +279,10 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
               m["max_deviation_mm"]] for m in mesh_checks],
             ["part", "triangles", "watertight", "manifold", "chord tol. (mm)", "max deviation (mm)"]))
     payload = json.dumps(scene_payload(design)).replace("</", "<\\/")
+    three = three_js()
     page = _fill(_template("report.html"), {
         "title": html.escape(design.name), "css": _template("report.css"), "body": "".join(parts),
-        "scene": payload, "viewer": _template("viewer.js")})
+        "scene": payload, "viewer": _template("viewer.js"), "importmap": three["importmap"],
+        "three_version": three["version"], "three_licence": three["licence"].replace("--", "- -")})
     # the template file ends with a newline; the page has always ended at </html>
     path.write_text(page.rstrip("\n"), encoding="utf-8")

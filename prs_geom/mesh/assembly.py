@@ -19,7 +19,8 @@ from numpy.typing import NDArray
 from prs_geom.geometry.frames import (FIRST_MID_PITCHES, part_warps, roller_transform, screw_z_range,
                                      thread_length)
 from prs_geom.model.design import PRSDesign
-from prs_geom.mesh.thread import ThreadMesh, thread_mesh
+from prs_geom.geometry.datum import datum_mark
+from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, thread_mesh
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
 
@@ -34,7 +35,8 @@ SIMPLIFIED_PARTS = {
 def build_part(design: PRSDesign, part: str, tol: float | None = None,
                profiles: ThreadProfiles | None = None,
                screw_profile: ThreadProfile | None = None) -> ThreadMesh:
-    """Mesh of one part in its own frame.
+    """Mesh of one part in its own frame, with its angular datum mark cut into face A
+    (the end face at the part's lower z, :mod:`prs_geom.geometry.datum`).
 
     ``screw_profile`` replaces the design's screw profile (e.g. with the corrected pitch
     diameter of the contact analysis).
@@ -46,13 +48,16 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
     first_mid = FIRST_MID_PITCHES[part] * p
     if part == "screw":
         lo, hi = screw_z_range(design)
-        return thread_mesh(screw_profile or prof.screw, lo, hi, tol, first_mid, warps["screw"])
-    if part == "roller":
-        return thread_mesh(prof.roller, 0.0, thread_length(design), tol, first_mid, warps["roller"])
-    if part == "nut":
-        return thread_mesh(prof.nut, 0.0, thread_length(design), tol, first_mid, warps["nut"],
-                           body_radius=0.5 * design.nut.outer_diameter_mm)
-    raise ValueError(f"unknown part {part!r}")
+        profile = screw_profile or prof.screw
+        tm = thread_mesh(profile, lo, hi, tol, first_mid, warps["screw"])
+    elif part == "roller":
+        tm = thread_mesh(prof.roller, 0.0, thread_length(design), tol, first_mid, warps["roller"])
+    elif part == "nut":
+        tm = thread_mesh(prof.nut, 0.0, thread_length(design), tol, first_mid, warps["nut"],
+                         body_radius=0.5 * design.nut.outer_diameter_mm)
+    else:
+        raise ValueError(f"unknown part {part!r}")
+    return cut_datum_mark(tm, datum_mark(tm.profile, tm.z_lo, tm.body_radius))
 
 
 def _cylinder(r_in: float, r_out: float, z0: float, z1: float, tol: float) -> trimesh.Trimesh:

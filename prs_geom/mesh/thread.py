@@ -40,10 +40,11 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from prs_geom.geometry.datum import DatumMark
 from prs_geom.geometry.helix import PitchWarp, identity_warp
 from prs_geom.geometry.profiles import ThreadProfile
 
-FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY = 0, 1, 2, 3
+FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY, FACE_MARK = 0, 1, 2, 3, 4
 #: Columns closer than this fraction of a column step to a strand end are dropped, so
 #: that no sliver triangles appear next to the end planes.
 COLUMN_MARGIN = 0.05
@@ -96,7 +97,8 @@ class ThreadMesh:
     """A part mesh with the data needed to check it against its analytic surface.
 
     Vertices are in the part frame (z along the part axis); ``face_kind`` labels thread
-    surface, lower/upper end faces and the nut's outer body cylinder.
+    surface, lower/upper end faces, the nut's outer body cylinder and the walls and floor
+    of the angular datum mark (``datum_mark``, :mod:`prs_geom.geometry.datum`).
     """
 
     part: str
@@ -111,6 +113,7 @@ class ThreadMesh:
     chord_tolerance: float
     body_radius: float | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    datum_mark: DatumMark | None = None
 
     def to_trimesh(self) -> trimesh.Trimesh:
         return trimesh.Trimesh(self.vertices, self.faces, process=False, validate=False)
@@ -385,6 +388,39 @@ def thread_mesh(profile: ThreadProfile, z_lo: float, z_hi: float, tol: float,
                                               "flank_segments": len(tess.flank_radii) - 1})
 
 
+def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
+    """``tm`` with the angular datum slot ``mark`` cut out of its face A (manifold3d, float64).
+
+    The boolean keeps every vertex of ``tm`` bit for bit (it only adds the vertices where
+    the slot meets face A and the slot's own corners) and carries each face's kind over
+    through manifold3d's face ids; the slot's walls and floor get ``FACE_MARK``. The slot
+    is symmetric about y = 0, so it is the same on right- and left-hand parts.
+    """
+    import manifold3d
+
+    n_faces = len(tm.faces)
+    part = manifold3d.Manifold(manifold3d.Mesh64(
+        np.ascontiguousarray(tm.vertices, dtype=np.float64), np.ascontiguousarray(tm.faces, dtype=np.uint64),
+        face_id=np.arange(n_faces, dtype=np.uint64)))
+    part_id = int(np.asarray(part.to_mesh64().run_original_id)[0])   # the id manifold3d gave the input
+    (x0, y0, z0), (x1, y1, z1) = mark.box(overshoot=1.0)
+    slot = manifold3d.Manifold.cube([x1 - x0, y1 - y0, z1 - z0]).translate([x0, y0, z0])
+    cut = part - slot
+    if cut.status() != manifold3d.Error.NoError:   # pragma: no cover - manifold3d refuses only broken input
+        raise RuntimeError(f"datum mark cut of the {tm.part} failed: {cut.status()}")
+    out = cut.to_mesh64()
+    V = np.array(np.asarray(out.vert_properties)[:, :3], dtype=np.float64, order="C")  # writable copy
+    F = np.array(out.tri_verts, dtype=np.int64, order="C")
+    # triangles are grouped in runs, one per input manifold; face ids index into that input
+    run_index = np.asarray(out.run_index, dtype=np.int64)
+    run_of_face = np.searchsorted(run_index[1:], np.arange(len(F)) * 3, side="right")
+    from_part = np.asarray(out.run_original_id)[run_of_face] == part_id
+    kind = np.full(len(F), FACE_MARK, np.int8)
+    kind[from_part] = tm.face_kind[np.asarray(out.face_id, dtype=np.int64)[from_part]]
+    return ThreadMesh(tm.part, V, F, kind, tm.profile, tm.warp, tm.first_mid, tm.z_lo, tm.z_hi,
+                      tm.chord_tolerance, tm.body_radius, meta=dict(tm.meta), datum_mark=mark)
+
+
 # --------------------------------------------------------------------------- checking
 #: Barycentric sample points per face: centroid, edge midpoints, three inner points.
 _BARY = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5],
@@ -475,6 +511,17 @@ def measure_deviation(tm: ThreadMesh) -> dict[str, float]:
     if tm.body_radius is not None:
         body = kind == FACE_BODY
         out["max_deviation_body_cylinder_mm"] = float(np.abs(r[body] - tm.body_radius).max(initial=0.0))
+    if tm.datum_mark is not None:
+        # every slot sample lies on one of the slot's five planes: its distance is the
+        # smallest distance to them, and it must not stray outside the box either
+        mark = tm.datum_mark
+        (x0, y0, _), (x1, y1, z1) = mark.box()
+        P = pts[kind == FACE_MARK]
+        on_plane = np.min(np.abs(np.column_stack([P[:, 0] - x0, P[:, 0] - x1, P[:, 1] - y0, P[:, 1] - y1,
+                                                  P[:, 2] - z1])), axis=1)
+        outside = np.max(np.column_stack([x0 - P[:, 0], P[:, 0] - x1, y0 - P[:, 1], P[:, 1] - y1,
+                                          mark.z_face - P[:, 2], P[:, 2] - z1, np.zeros(len(P))]), axis=1)
+        out["max_deviation_datum_mark_mm"] = float(np.maximum(on_plane, outside).max(initial=0.0))
     out["max_deviation_mm"] = max(v for k_, v in out.items() if k_.startswith("max_"))
     return out
 
@@ -515,7 +562,8 @@ def float32_rounding(vertices: NDArray[np.float64]) -> float:
 
 #: Region names of :func:`measure_deviation` as they read in a warning.
 _REGION_TEXT = {"body": "thread surface", "end": "thread surface next to the end planes",
-                "end_face": "end faces", "body_cylinder": "outer body cylinder"}
+                "end_face": "end faces", "body_cylinder": "outer body cylinder",
+                "datum_mark": "angular datum mark"}
 
 
 def deviation_warnings(deviation: dict[str, float], tol: float) -> list[str]:
@@ -552,6 +600,10 @@ def mesh_report(tm: ThreadMesh, analytic_volume: float | None = None) -> dict[st
         "volume_mm3": float(m.volume),
         "float32_rounding_mm": float32_rounding(tm.vertices),
     }
+    if tm.datum_mark is not None:
+        mk = tm.datum_mark
+        row["datum_mark"] = {"z_face_mm": mk.z_face, "r_inner_mm": mk.r_inner, "r_outer_mm": mk.r_outer,
+                             "width_mm": mk.width, "depth_mm": mk.depth, "volume_mm3": mk.volume}
     if analytic_volume is not None:
         row["analytic_volume_mm3"] = analytic_volume
         row["volume_rel_error"] = (row["volume_mm3"] - analytic_volume) / analytic_volume

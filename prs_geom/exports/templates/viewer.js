@@ -1,120 +1,158 @@
-(function () {
-  const errs = [];
-  window.addEventListener('error', function (e) {
-    errs.push(String(e.message));
-    document.body.dataset.errors = String(errs.length);
-    const el = document.getElementById('errors');
-    if (el) { el.textContent = errs.join('\n'); el.style.display = 'block'; }
-  });
-  function decode(b64, Type) {
-    const bin = atob(b64); const buf = new ArrayBuffer(bin.length); const u8 = new Uint8Array(buf);
-    for (let i = 0; i < bin.length; i++) u8[i] = bin.charCodeAt(i);
-    return new Type(buf);
+// report.html 3D view: three.js (WebGL, depth-buffered) on the embedded scene data.
+// Frames: the data are in the screw frame, z along the screw axis, mm; the view turns them
+// to three.js's y-up. One BufferGeometry per distinct part mesh, one Mesh per placed part
+// (the rollers share one geometry). Drag to rotate, wheel to zoom, right-drag to pan.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const BACKGROUND = 0xf4f6f8;
+const data = JSON.parse(document.getElementById('scene-data').textContent);
+
+function decode(b64, Type) {
+  const bin = atob(b64); const u8 = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) u8[i] = bin.charCodeAt(i);
+  return new Type(u8.buffer);
+}
+
+const canvas = document.getElementById('view');
+let renderer;
+try {
+  renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+} catch (e) {
+  document.body.dataset.viewer = 'no-webgl';
+  document.getElementById('viewinfo').textContent =
+    'This browser offers no WebGL, so the 3D view cannot be drawn (the tables below are complete).';
+  throw e;
+}
+renderer.localClippingEnabled = true;
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(BACKGROUND);
+const root = new THREE.Group();
+root.rotation.x = -Math.PI / 2;              // screw frame z-up -> three.js y-up
+scene.add(root);
+
+const geometries = data.meshes.map(m => {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(decode(m.v, Float32Array), 3));
+  g.setIndex(new THREE.BufferAttribute(decode(m.f, Uint32Array), 1));
+  g.computeBoundingBox();
+  return g;
+});
+// the nut is cut open by a plane through the axis facing the camera
+const cutPlane = new THREE.Plane(new THREE.Vector3(1, 0, 0), 0);
+const materials = {};
+function material(colour, cut) {
+  const key = colour + (cut ? ':cut' : '');
+  if (!materials[key]) {
+    materials[key] = new THREE.MeshStandardMaterial({
+      color: new THREE.Color(colour), metalness: 0.35, roughness: 0.45, flatShading: true,
+      side: cut ? THREE.DoubleSide : THREE.FrontSide, clippingPlanes: cut ? [cutPlane] : [],
+    });
   }
-  function hex(c) { return [parseInt(c.slice(1, 3), 16), parseInt(c.slice(3, 5), 16), parseInt(c.slice(5, 7), 16)]; }
-  const data = JSON.parse(document.getElementById('scene-data').textContent);
-  const meshes = data.meshes.map(m => ({ v: decode(m.v, Float32Array), f: decode(m.f, Uint32Array) }));
-  let nTri = 0;
-  for (const inst of data.instances) nTri += meshes[inst.mesh].f.length / 3;
-  const P = new Float32Array(nTri * 9), N = new Float32Array(nTri * 3), C = new Uint8Array(nTri * 3);
-  const CUT = new Uint8Array(nTri);
-  let t = 0; const lo = [1e9, 1e9, 1e9], hi = [-1e9, -1e9, -1e9];
-  for (const inst of data.instances) {
-    const m = meshes[inst.mesh], T = inst.T, col = hex(inst.colour);
-    for (let k = 0; k < m.f.length; k += 3, t++) {
-      const q = [];
-      for (let c = 0; c < 3; c++) {
-        const i = m.f[k + c] * 3, x = m.v[i], y = m.v[i + 1], z = m.v[i + 2];
-        const w = [T[0] * x + T[1] * y + T[2] * z + T[3], T[4] * x + T[5] * y + T[6] * z + T[7],
-                   T[8] * x + T[9] * y + T[10] * z + T[11]];
-        for (let d = 0; d < 3; d++) { P[t * 9 + c * 3 + d] = w[d]; lo[d] = Math.min(lo[d], w[d]); hi[d] = Math.max(hi[d], w[d]); }
-        q.push(w);
-      }
-      const ux = q[1][0] - q[0][0], uy = q[1][1] - q[0][1], uz = q[1][2] - q[0][2];
-      const vx = q[2][0] - q[0][0], vy = q[2][1] - q[0][1], vz = q[2][2] - q[0][2];
-      let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-      const len = Math.hypot(nx, ny, nz) || 1;
-      N[t * 3] = nx / len; N[t * 3 + 1] = ny / len; N[t * 3 + 2] = nz / len;
-      C[t * 3] = col[0]; C[t * 3 + 1] = col[1]; C[t * 3 + 2] = col[2];
-      CUT[t] = inst.cut ? 1 : 0;
-    }
+  return materials[key];
+}
+let nTri = 0;
+const box = new THREE.Box3();
+for (const inst of data.instances) {
+  const g = geometries[inst.mesh];
+  const mesh = new THREE.Mesh(g, material(inst.colour, inst.cut));
+  mesh.name = inst.name;
+  mesh.matrixAutoUpdate = false;
+  const T = inst.T;
+  mesh.matrix.set(T[0], T[1], T[2], T[3], T[4], T[5], T[6], T[7], T[8], T[9], T[10], T[11],
+                  T[12], T[13], T[14], T[15]);
+  root.add(mesh);
+  nTri += g.index.count / 3;
+}
+root.updateMatrixWorld(true);
+box.setFromObject(root);
+const sphere = box.getBoundingSphere(new THREE.Sphere());
+
+const camera = new THREE.PerspectiveCamera(30, 900 / 560, 0.01 * sphere.radius, 100 * sphere.radius);
+scene.add(camera);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x8090a0, 1.6));
+const key = new THREE.DirectionalLight(0xffffff, 2.2);
+key.position.set(1, 1.5, 2);
+camera.add(key);                              // the light follows the view
+const controls = new OrbitControls(camera, canvas);
+controls.target.copy(sphere.center);
+
+// the camera distance at which the bounding sphere fits both the height and the width
+function fitDistance() {
+  const half = THREE.MathUtils.degToRad(camera.fov / 2);
+  const halfH = Math.atan(Math.tan(half) * Math.min(1, camera.aspect));
+  return 1.04 * sphere.radius / Math.sin(halfH);
+}
+const viewDir = new THREE.Vector3(0.55, 0.45, 1.0).normalize();
+camera.position.copy(sphere.center).addScaledVector(viewDir, fitDistance());
+controls.update();
+
+function updateCut() {
+  const cut = document.getElementById('cutaway').checked;
+  // normal from the camera to the axis, horizontal: the half nearer to the viewer is clipped
+  const n = new THREE.Vector3().subVectors(sphere.center, camera.position);
+  n.y = 0;
+  if (n.lengthSq() < 1e-12) n.set(0, 0, -1);
+  n.normalize();
+  cutPlane.normal.copy(n);
+  cutPlane.constant = -n.dot(sphere.center);
+  for (const m of Object.values(materials)) {
+    if (m.side === THREE.DoubleSide) m.clippingPlanes = cut ? [cutPlane] : [];
   }
-  const centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
-  // the bounding box's diagonal: the assembly's projection fits it at every rotation
-  const span = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-  const canvas = document.getElementById('view'), ctx = canvas.getContext('2d');
-  let yaw = 0.6, pitch = -1.2, zoom = 1.0;
-  const depth = new Float32Array(nTri), order = new Uint32Array(nTri), X = new Float32Array(nTri * 6);
-  function draw() {
-    const W = canvas.width, H = canvas.height, s = zoom * 0.96 * Math.min(W, H) / span;
-    const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
-    // rotation: yaw about z, then pitch about x (view looks along -z of the rotated frame)
-    const R = [cy, -sy, 0, cp * sy, cp * cy, -sp, sp * sy, sp * cy, cp];
-    ctx.fillStyle = '#f4f6f8'; ctx.fillRect(0, 0, W, H);
-    let n = 0;
-    const cut = document.getElementById('cutaway').checked;
-    for (let i = 0; i < nTri; i++) {
-      const nzv = R[6] * N[i * 3] + R[7] * N[i * 3 + 1] + R[8] * N[i * 3 + 2];
-      if (CUT[i] && cut) {
-        // cutaway: drop the nut's half nearer to the viewer (centroid in front of the axis)
-        const gx = (P[i * 9] + P[i * 9 + 3] + P[i * 9 + 6]) / 3 - centre[0];
-        const gy = (P[i * 9 + 1] + P[i * 9 + 4] + P[i * 9 + 7]) / 3 - centre[1];
-        if (R[6] * gx + R[7] * gy > 0) continue;
-      } else if (nzv <= 0) continue;
-      let zsum = 0;
-      for (let c = 0; c < 3; c++) {
-        const x = P[i * 9 + c * 3] - centre[0], y = P[i * 9 + c * 3 + 1] - centre[1], z = P[i * 9 + c * 3 + 2] - centre[2];
-        X[i * 6 + c * 2] = W / 2 + s * (R[0] * x + R[1] * y + R[2] * z);
-        X[i * 6 + c * 2 + 1] = H / 2 - s * (R[3] * x + R[4] * y + R[5] * z);
-        zsum += R[6] * x + R[7] * y + R[8] * z;
-      }
-      depth[i] = zsum; order[n++] = i;
-    }
-    const vis = order.subarray(0, n);
-    vis.sort((a, b) => depth[a] - depth[b]);
-    for (let k = 0; k < n; k++) {
-      const i = vis[k];
-      const nzv = R[6] * N[i * 3] + R[7] * N[i * 3 + 1] + R[8] * N[i * 3 + 2];
-      const l = 0.35 + 0.65 * Math.abs(nzv);
-      const col = 'rgb(' + (C[i * 3] * l | 0) + ',' + (C[i * 3 + 1] * l | 0) + ',' + (C[i * 3 + 2] * l | 0) + ')';
-      ctx.fillStyle = col; ctx.strokeStyle = col; ctx.lineWidth = 0.5;
-      ctx.beginPath();
-      ctx.moveTo(X[i * 6], X[i * 6 + 1]); ctx.lineTo(X[i * 6 + 2], X[i * 6 + 3]); ctx.lineTo(X[i * 6 + 4], X[i * 6 + 5]);
-      ctx.closePath(); ctx.fill(); ctx.stroke();
-    }
-    // self-check for the browser tests: model pixels on the canvas border mean clipping;
-    // coverage = share of the canvas the parts cover (sampled every 4th pixel)
-    const img = ctx.getImageData(0, 0, W, H).data;
-    const bg = (o) => Math.abs(img[o] - 0xf4) + Math.abs(img[o + 1] - 0xf6) + Math.abs(img[o + 2] - 0xf8) < 12;
-    let edge = 0, cover = 0, total = 0;
-    for (let x = 0; x < W; x++) { if (!bg(4 * x)) edge++; if (!bg(4 * ((H - 1) * W + x))) edge++; }
-    for (let y = 0; y < H; y++) { if (!bg(4 * y * W)) edge++; if (!bg(4 * (y * W + W - 1))) edge++; }
-    for (let y = 0; y < H; y += 4) for (let x = 0; x < W; x += 4) { total++; if (!bg(4 * (y * W + x))) cover++; }
-    document.body.dataset.edgePixels = String(edge);
-    document.body.dataset.coverage = (cover / total).toFixed(3);
-    document.body.dataset.canvas = W + 'x' + H;
-    document.getElementById('viewinfo').textContent =
-      nTri + ' triangles (' + n + ' facing the viewer), display tolerance ' + data.tolerance_mm + ' mm. Drag to rotate, wheel to zoom.';
-  }
-  let dragging = false, lx = 0, ly = 0, pending = false;
-  function later() { if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; draw(); }); } }
-  canvas.addEventListener('mousedown', e => { dragging = true; lx = e.clientX; ly = e.clientY; });
-  window.addEventListener('mouseup', () => { dragging = false; });
-  window.addEventListener('mousemove', e => {
-    if (!dragging) return;
-    yaw += 0.01 * (e.clientX - lx); pitch += 0.01 * (e.clientY - ly); lx = e.clientX; ly = e.clientY; later();
-  });
-  document.getElementById('cutaway').addEventListener('change', later);
-  canvas.addEventListener('wheel', e => { e.preventDefault(); zoom *= Math.exp(-0.001 * e.deltaY); later(); }, { passive: false });
-  // the canvas follows the page width (at most its 900 px design width), keeping its aspect
-  function resize() {
-    const w = Math.max(200, Math.min(900, Math.floor(canvas.parentElement.clientWidth || 900)));
-    const h = Math.round(w * 560 / 900);
-    if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
-    draw();
-  }
-  window.addEventListener('resize', resize);
-  resize();
-  document.body.dataset.triangles = String(nTri);
-  document.body.dataset.viewer = 'ok';
-})();
+}
+
+// self-check for the browser tests: model pixels on the canvas border mean clipping;
+// coverage = share of the canvas the parts cover (every 4th pixel); renderer = the WebGL
+// version drawing (occlusion per pixel by the depth buffer, no painter's sort)
+function selfCheck() {
+  const gl = renderer.getContext();
+  const W = gl.drawingBufferWidth, H = gl.drawingBufferHeight;
+  const px = new Uint8Array(W * H * 4);
+  gl.readPixels(0, 0, W, H, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  // the background as written to the sRGB canvas (THREE.Color would hold it linearised)
+  const br = (BACKGROUND >> 16) & 255, bgg = (BACKGROUND >> 8) & 255, bb = BACKGROUND & 255;
+  const bg = (x, y) => {
+    const o = 4 * (y * W + x);
+    return Math.abs(px[o] - br) + Math.abs(px[o + 1] - bgg) + Math.abs(px[o + 2] - bb) < 12;
+  };
+  let edge = 0, cover = 0, total = 0;
+  for (let x = 0; x < W; x++) { if (!bg(x, 0)) edge++; if (!bg(x, H - 1)) edge++; }
+  for (let y = 0; y < H; y++) { if (!bg(0, y)) edge++; if (!bg(W - 1, y)) edge++; }
+  for (let y = 0; y < H; y += 4) for (let x = 0; x < W; x += 4) { total++; if (!bg(x, y)) cover++; }
+  document.body.dataset.edgePixels = String(edge);
+  document.body.dataset.coverage = (cover / total).toFixed(3);
+  document.body.dataset.renderer = renderer.capabilities.isWebGL2 ? 'webgl2' : 'webgl1';
+  document.body.dataset.depthBits = String(gl.getParameter(gl.DEPTH_BITS));
+  document.body.dataset.canvas = W + 'x' + H;
+}
+
+let checked = false;
+function draw() {
+  updateCut();
+  renderer.render(scene, camera);
+  if (!checked) { selfCheck(); checked = true; }
+}
+let pending = false;
+function later() { if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; draw(); }); } }
+controls.addEventListener('change', later);
+document.getElementById('cutaway').addEventListener('change', later);
+
+// the canvas follows the page width (at most its 900 px design width), keeping its aspect
+function resize() {
+  const w = Math.max(200, Math.min(900, Math.floor(canvas.parentElement.clientWidth || 900)));
+  const h = Math.round(w * 560 / 900);
+  renderer.setPixelRatio(1);
+  renderer.setSize(w, h, false);
+  canvas.style.width = w + 'px'; canvas.style.height = h + 'px';
+  camera.aspect = w / h;
+  camera.updateProjectionMatrix();
+  checked = false;
+  draw();
+}
+window.addEventListener('resize', resize);
+resize();
+document.getElementById('viewinfo').textContent =
+  nTri + ' triangles, display tolerance ' + data.tolerance_mm + ' mm; three.js ' + THREE.REVISION +
+  ' (WebGL). Drag to rotate, wheel to zoom, right-drag to pan.';
+document.body.dataset.triangles = String(nTri);
+document.body.dataset.viewer = 'ok';
