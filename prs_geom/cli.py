@@ -118,7 +118,10 @@ def cmd_build(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("exports") / design.name
     check_output_dir(out)   # refuse before any work
     progress = silent if args.quiet else StderrProgress()
-    report = build(design, out, progress=progress, memory_budget=_memory_budget(args))
+    from prs_geom.pipeline import BuildOptions
+
+    options = BuildOptions(nominal_screw="nominal" in (args.screw or []))
+    report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
     for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
         print(f"warning: {msg}", file=sys.stderr)
@@ -584,6 +587,9 @@ def make_parser() -> argparse.ArgumentParser:
                                                 "path, an empty folder or an earlier prs-geom output "
                                                 "folder; anything else is refused")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--screw", action="append", choices=["theoretical", "nominal"], metavar="KIND",
+                   help="screw meshes to export: screw.stl is always the theoretical screw (the state "
+                        "the analysis certifies); 'nominal' also writes screw_nominal.stl")
     budget_arg(p)
     p.set_defaults(func=cmd_build)
 

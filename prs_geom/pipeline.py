@@ -32,7 +32,7 @@ from prs_geom.geometry.frames import carrier_angles, roller_spin
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
-from prs_geom.model.io import PRS_KINDS, design_to_dict, dumps_toml, load_design
+from prs_geom.model.io import PRS_KINDS, design_hash, design_to_dict, dumps_toml, load_design
 from prs_geom.progress import ProgressFn, silent
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -102,6 +102,20 @@ class MeshStage:
     checks: list[dict[str, Any]]
 
 
+@dataclass(frozen=True)
+class BuildOptions:
+    """What a build writes beyond the default set (``prs-geom build`` flags).
+
+    Attributes
+    ----------
+    nominal_screw : bool
+        Also export the nominal screw (``screw_nominal.stl``; ``--screw nominal``). The
+        exported ``screw.stl`` is always the theoretical screw the analysis certifies.
+    """
+
+    nominal_screw: bool = False
+
+
 @dataclass
 class BuildContext:
     """What stages share: the design, the temporary output folder, the report being
@@ -111,6 +125,7 @@ class BuildContext:
     out: Path
     report: dict[str, Any]
     progress: ProgressFn = silent
+    options: BuildOptions = field(default_factory=BuildOptions)
     contact: ContactResult | None = None
     loads: LoadsResult | None = None
     tolerance: "ToleranceStudy | None" = None
@@ -194,11 +209,12 @@ def stage_meshes(ctx: BuildContext) -> None:
     """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
     from prs_geom.exports.meshes import export_meshes
     from prs_geom.geometry.frames import thread_length
-    from prs_geom.mesh.assembly import SIMPLIFIED_PARTS, build_assembly
+    from prs_geom.mesh.assembly import SIMPLIFIED_PARTS, build_assembly, build_part
     from prs_geom.mesh.thread import analytic_thread_volume, mesh_report
 
     d = ctx.design
-    asm = build_assembly(d, progress=ctx.progress)
+    # the screw of every export is the theoretical one (the state the analysis certifies)
+    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
     rows = []
     lengths = {"screw": d.screw.length_mm, "roller": thread_length(d), "nut": thread_length(d)}
     for i, (name, tm) in enumerate(asm.parts.items()):
@@ -216,7 +232,8 @@ def stage_meshes(ctx: BuildContext) -> None:
         "simplified": SIMPLIFIED_PARTS,
         "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
     }
-    for name in export_meshes(asm, ctx.out):
+    nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
+    for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.report["files"].append(name)
 
 
@@ -227,7 +244,8 @@ def stage_checks(ctx: BuildContext) -> None:
     from prs_geom.checks.interference import interference_checks
 
     screw = ctx.contact.screw_profile
-    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design, screw_profile=screw)
+    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design, screw_profile=screw,
+                                                  designed_gaps=ctx.contact.tooth_gaps)
     ctx.progress("fcl verification", 1, 1)
     ctx.report["checks"]["interference"] = interference_checks(ctx.design, screw, progress=ctx.progress)
     ctx.report["warnings"] += check_warnings(ctx.report)
@@ -330,8 +348,10 @@ def check_warnings(report: dict[str, Any]) -> list[str]:
 
 
 def run_stages(design, out: Path, progress: ProgressFn = silent,
-               stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None) -> BuildContext:
-    ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress)
+               stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
+               options: BuildOptions | None = None) -> BuildContext:
+    ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress,
+                       options=options or BuildOptions())
     for name, fn in (STAGES if stages is None else stages):
         t0 = time.perf_counter()
         fn(ctx)
@@ -342,7 +362,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
 
 def harmonic_stage(ctx: BuildContext) -> None:
     """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
-    from prs_geom.exports.meshes import write_stl
+    from prs_geom.exports.meshes import stl_header, write_stl
     from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
                                            flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
                                            write_dxf)
@@ -359,7 +379,7 @@ def harmonic_stage(ctx: BuildContext) -> None:
     for name, mesh, prof, arc_bound in (
             ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d), 0.0),
             ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
-        write_stl(mesh, ctx.add_file(f"{name}.stl"))
+        write_stl(mesh, ctx.add_file(f"{name}.stl"), stl_header(name, design_hash(d)))
         rev = revolve_deviation(mesh, prof)
         dev = rev + arc_bound
         rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
@@ -370,6 +390,10 @@ def harmonic_stage(ctx: BuildContext) -> None:
                      if dev > tol else []})
     ctx.report["checks"]["meshes"] = rows
     ctx.report["warnings"] += check_warnings(ctx.report)
+    from prs_geom.harmonic.exports import harmonic_outputs
+
+    # the placed assembly (wave generator, deformed flexspline), GLB, 3MF and report.html
+    ctx.report["files"] += harmonic_outputs(d, ctx.out, ctx.report, _build_date(), __version__)
 
 
 HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
@@ -389,7 +413,7 @@ def _environment_failure(exc: OSError, atomic: AtomicOutputDir) -> EnvironmentFa
 
 
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
-          memory_budget: int | None = None) -> dict[str, Any]:
+          memory_budget: int | None = None, options: BuildOptions | None = None) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``: what
     ``prs-geom build`` does.
 
@@ -397,7 +421,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     (:mod:`prs_geom.exports.output`; anything else raises
     :class:`~prs_geom.model.errors.OutputRefused` before any work). The job is refused up
     front when its estimated memory exceeds ``memory_budget`` (bytes; default a share of the
-    available memory, :mod:`prs_geom.mesh.budget`). Written atomically: if any stage fails,
+    available memory, :mod:`prs_geom.mesh.budget`). ``options``: :class:`BuildOptions`. Written atomically: if any stage fails,
     ``out_dir`` keeps its previous content. Returns the report dict.
     """
     from prs_geom.mesh.budget import guard
@@ -408,7 +432,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
         guard(design, memory_budget)
     try:
         with atomic as tmp:
-            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None)
+            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options)
             ctx.report["files"].append(REPORT_NAME)
             (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
     except OSError as exc:

@@ -43,8 +43,10 @@ def _b64(a: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(a).tobytes()).decode("ascii")
 
 
-def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM) -> dict[str, Any]:
-    asm = build_assembly(design, tol=tol)
+def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM, screw_profile=None) -> dict[str, Any]:
+    """The 3D view's data: the assembly at the display tolerance, with the theoretical screw
+    ``screw_profile`` when given (as exported)."""
+    asm = build_assembly(design, tol=tol, screw_profile=screw_profile)
     meshes, index, instances = [], {}, []
     for name, (mesh, T, kind) in asm.placed.items():
         if id(mesh) not in index:
@@ -150,12 +152,27 @@ def _checks_html(checks: dict[str, Any], contact: ContactResult | None) -> str:
                                               "mean thickness (mm)", "teeth"], full=True))
     fc = checks.get("fcl")
     if fc:
-        out.append(f"<p>FCL mesh distance against the analytic contact: largest difference "
-                   f"{fc['max_abs_difference_mm']:.3e} mm (tolerance {fc['difference_tolerance_mm']} mm).</p>")
-        out.append(_table([[c["side"], c["roller"], c["tooth"], c["analytic_distance_mm"], c["fcl_distance_mm"],
-                            c["difference_mm"]] for c in fc["comparisons"]],
-                          ["side", "roller", "tooth", "analytic distance (mm)", "FCL distance (mm)",
-                           "difference (mm)"], full=True))
+        out.append(f"<p>FCL mesh distance against the analytic contact, every tooth of every roller "
+                   f"({fc['rollers_checked']} rollers x {fc['teeth_checked']} teeth, both sides), patches at "
+                   f"{fc['patch_chord_tolerance_mm'] * 1e3:g} um chord tolerance: largest |FCL gap - designed "
+                   f"gap| {fc['max_abs_gap_difference_um']:.4f} um (tolerance "
+                   f"{fc['difference_tolerance_mm'] * 1e3:.4f} um); {len(fc['warnings'])} warning(s).</p>")
+        rows = []
+        for side in ("screw", "nut"):
+            cs = [c for c in fc["comparisons"] if c["side"] == side]
+            if cs:
+                fg = [c["fcl_gap_um"] for c in cs]
+                dg = [c["designed_gap_um"] for c in cs]
+                rows.append([side, cs[0]["flank"], len(cs), min(dg), max(dg), min(fg), max(fg),
+                             max(abs(c["gap_difference_um"]) for c in cs)])
+        out.append(_table(rows, ["side", "roller flank", "teeth checked", "designed gap min (um)",
+                                 "designed gap max (um)", "FCL gap min (um)", "FCL gap max (um)",
+                                 "max |difference| (um)"], full=True))
+        out.append("<details><summary>every tooth (FCL and designed gap)</summary>" + _table(
+            [[c["side"], c["roller"], c["tooth"], c["designed_gap_um"], c["fcl_gap_um"], c["gap_difference_um"],
+              c["fcl_distance_mm"], c["analytic_distance_mm"]] for c in fc["comparisons"]],
+            ["side", "roller", "tooth", "designed gap (um)", "FCL gap (um)", "difference (um)",
+             "FCL distance (mm)", "analytic distance (mm)"], full=True) + "</details>")
     if contact is not None and contact.tooth_gaps:
         g = contact.tooth_gaps
         rows = []
@@ -278,7 +295,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
             [[m["part"], m["triangles"], m["watertight"], m["manifold"], m["chord_tolerance_mm"],
               m["max_deviation_mm"]] for m in mesh_checks],
             ["part", "triangles", "watertight", "manifold", "chord tol. (mm)", "max deviation (mm)"]))
-    payload = json.dumps(scene_payload(design)).replace("</", "<\\/")
+    payload = json.dumps(scene_payload(design, screw_profile=contact.screw_profile if contact else None)
+                         ).replace("</", "<\\/")
     three = three_js()
     page = _fill(_template("report.html"), {
         "title": html.escape(design.name), "css": _template("report.css"), "body": "".join(parts),

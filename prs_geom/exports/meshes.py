@@ -1,32 +1,86 @@
-"""Mesh exports: binary STL per part and for the assembly, GLB scene with named parts.
+"""Mesh exports: binary STL per part and for the assembly, the assembly as GLB and 3MF.
+
+* ``screw.stl``, ``roller.stl``, ``nut.stl``: one part each, in its part frame, mm. The
+  screw is the THEORETICAL one (pitch diameter from the contact analysis: the state the
+  analysis certifies as free of interference); ``screw_nominal.stl`` holds the nominal screw
+  when asked (``prs-geom build --screw nominal``).
+* ``assembly.stl``: every placed part in the screw frame, for a quick look. It is a
+  multi-body file: STL has no notion of parts, so the touching parts arrive as separate
+  shells in one triangle list (CAD users take the GLB, 3MF or per-part STLs).
+* ``assembly.glb`` (glTF 2.0, metres, +Y up) and ``assembly.3mf`` (millimetres), written by
+  :mod:`prs_geom.exports.scene`: one named node / build item per part and per roller.
 
 STL and GLB store vertex coordinates as float32: the rounding this costs is measured and
-reported (``float32_rounding_mm``, :func:`prs_geom.mesh.float32_rounding`) next to the
-chordal error.
+reported (``float32_rounding_mm``, :func:`prs_geom.mesh.thread.float32_rounding`) next to the
+chordal error. The STL writer fills one numpy record array (no loop over triangles); its
+80-byte header names the part, the units, the frame and the design hash, and never starts
+with ``solid`` (which some readers take for ASCII STL).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-import trimesh
+import numpy as np
+from numpy.typing import NDArray
 
 from prs_geom.mesh.assembly import Assembly
 
+#: Binary STL record: normal, three vertices (float32 LE), attribute byte count.
+_STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
-def write_stl(mesh: trimesh.Trimesh, path: Path) -> None:
-    path.write_bytes(trimesh.exchange.stl.export_stl(mesh))
+
+def stl_bytes(vertices: NDArray[np.float64], faces: NDArray[np.int64], header: str = "") -> bytes:
+    """Binary STL of a triangle mesh; facet normals from the float64 vertices.
+
+    ``header`` (ASCII, at most 80 characters, padded with spaces) must not start with
+    ``solid``.
+    """
+    head = header.encode("ascii")
+    if len(head) > 80 or head.lower().startswith(b"solid"):
+        raise ValueError(f"STL header {header!r}: at most 80 ASCII characters, not starting with 'solid'")
+    V = np.asarray(vertices, dtype=np.float64)
+    F = np.asarray(faces, dtype=np.int64)
+    tri = V[F]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    rec = np.zeros(len(F), dtype=_STL_RECORD)
+    rec["normal"] = n
+    rec["v"] = tri
+    return head.ljust(80, b" ") + np.uint32(len(F)).tobytes() + rec.tobytes()
 
 
-def export_meshes(asm: Assembly, out: Path) -> dict[str, str]:
-    """Write ``screw.stl``, ``roller.stl`` (part frame), ``nut.stl``, ``assembly.stl``
-    (every scene part placed) and ``assembly.glb`` (scene, one named node per part).
-    Returns {file name: description}."""
+def write_stl(mesh, path: Path, header: str = "") -> None:
+    """Write a mesh (anything with ``vertices`` and ``faces``) as binary STL."""
+    Path(path).write_bytes(stl_bytes(mesh.vertices, mesh.faces, header))
+
+
+def stl_header(part: str, design_hash: str, frame: str = "part frame") -> str:
+    return f"prs_geom {part}; units mm; {frame}; design sha256 {design_hash}"[:80]
+
+
+def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None) -> dict[str, str]:
+    """Write the mesh files listed in the module docstring; returns {file name: description}.
+
+    ``nominal_screw``: the nominal screw's mesh (anything with ``vertices`` and ``faces``),
+    written as ``screw_nominal.stl`` when given.
+    """
+    from prs_geom.exports.scene import assembly_scene, write_3mf, write_glb
+
     files = {}
     for name in ("screw", "roller", "nut"):
-        write_stl(asm.parts[name].to_trimesh(), out / f"{name}.stl")
-        files[f"{name}.stl"] = f"{name} thread, part frame, binary STL (mm)"
-    write_stl(asm.combined(), out / "assembly.stl")
-    files["assembly.stl"] = "all parts placed in the screw frame, binary STL (mm)"
-    (out / "assembly.glb").write_bytes(trimesh.exchange.gltf.export_glb(asm.scene()))
-    files["assembly.glb"] = "scene with one named node per part (glTF binary; units mm)"
+        write_stl(asm.parts[name], out / f"{name}.stl", stl_header(name, design_hash))
+        what = "theoretical-pitch-diameter screw" if name == "screw" else name
+        files[f"{name}.stl"] = f"{what} thread, part frame, binary STL (mm)"
+    if nominal_screw is not None:
+        write_stl(nominal_screw, out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
+        files["screw_nominal.stl"] = "nominal screw thread (not the analysed state), part frame, binary STL (mm)"
+    V, F = asm.combined_arrays()
+    (out / "assembly.stl").write_bytes(stl_bytes(V, F, stl_header("assembly, multi-body", design_hash,
+                                                                   "screw frame")))
+    files["assembly.stl"] = "all parts placed in the screw frame, multi-body binary STL (mm), for viewing"
+    scene = assembly_scene(asm, asm.design.name)
+    write_glb(scene, out / "assembly.glb")
+    files["assembly.glb"] = "glTF 2.0 binary: one named node per part and roller, metres, +Y up, PBR materials"
+    write_3mf(scene, out / "assembly.3mf")
+    files["assembly.3mf"] = "3MF: one object per distinct part, one build item per placed part (mm)"
     return files

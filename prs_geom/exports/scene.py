@@ -1,0 +1,355 @@
+"""Scene exports for CAD and viewers: glTF 2.0 binary (``.glb``) and 3MF.
+
+A :class:`Scene` is what both formats hold: distinct meshes (each in its own part frame, mm,
+float64), PBR materials, and a tree of named nodes placing the meshes with rigid 4x4
+transforms (mm). The rollers are one mesh placed z times. :func:`assembly_scene` builds it
+from a placed :class:`~prs_geom.mesh.assembly.Assembly`.
+
+glTF (:func:`write_glb`), per the glTF 2.0 specification:
+
+* units are metres (glTF's unit): vertex positions and node translations are scaled by 1e-3
+  when written (float32 of metres keeps about 0.06 um on a 1 m part; the rounding is reported
+  by the mesh checks);
+* +Y is up: one root node ``prs_geom`` turns the screw frame (axis +z) to +Y by a rotation
+  of -90 deg about +X, so the screw axis reads along +Y in every viewer;
+* one named node per part and per roller (the roller nodes share one mesh), PBR metallic-
+  roughness materials per part, vertex normals split at sharp edges (corners whose faces
+  bend by more than :data:`SHARP_EDGE_DEG` get their own vertex), indices as uint32;
+* no extensions and no ``extras``: nothing a reader has to know about prs_geom.
+
+3MF (:func:`write_3mf`), per the 3MF core specification, written with lib3mf (the 3MF
+Consortium's reference library, which also validates what it writes): unit millimetre, one
+named mesh object per distinct mesh, one build item per placed part carrying its transform
+(the rollers are build items of one object), a base material (display colour) per part.
+Object and build UUIDs are derived from the content, so the file is the same bytes from run
+to run.
+"""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import json
+import locale
+import math
+import os
+import struct
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from prs_geom._version import __version__
+
+#: Corners whose adjacent faces bend by more than this share no normal (deg).
+SHARP_EDGE_DEG = 30.0
+#: Screw frame (z up) to glTF (y up): rotation of -90 deg about +x, as a quaternion (x, y, z, w).
+Z_UP_TO_Y_UP = (-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))
+
+
+@dataclass(frozen=True)
+class Material:
+    """A PBR metallic-roughness material; ``colour`` is linear RGBA in [0, 1]."""
+
+    name: str
+    colour: tuple[float, float, float, float]
+    metallic: float = 0.85
+    roughness: float = 0.35
+
+    def __post_init__(self) -> None:
+        if not all(0.0 <= c <= 1.0 for c in (*self.colour, self.metallic, self.roughness)):
+            raise ValueError(f"material {self.name!r}: colour, metallic and roughness must lie in [0, 1]")
+
+    @property
+    def srgb_hex(self) -> str:
+        """The colour as sRGB ``#RRGGBBAA`` (3MF display colours are sRGB)."""
+        def enc(c: float) -> int:
+            s = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+            return int(round(255 * min(max(s, 0.0), 1.0)))
+        r, g, b, a = self.colour
+        return "#%02X%02X%02X%02X" % (enc(r), enc(g), enc(b), int(round(255 * a)))
+
+
+@dataclass(frozen=True, eq=False)
+class SceneMesh:
+    """One distinct mesh in its own frame: vertices (N, 3) mm, faces (M, 3), a material."""
+
+    name: str
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    material: str
+
+
+@dataclass(frozen=True, eq=False)
+class SceneNode:
+    """A named node: an optional mesh (by name) placed by ``transform`` (4x4, mm, relative
+    to the parent node), and child nodes."""
+
+    name: str
+    mesh: str | None = None
+    transform: NDArray[np.float64] = field(default_factory=lambda: np.eye(4))
+    children: tuple["SceneNode", ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Meshes and materials by name, and the root nodes (screw frame, z up, mm)."""
+
+    meshes: dict[str, SceneMesh]
+    materials: dict[str, Material]
+    nodes: tuple[SceneNode, ...]
+    title: str = ""
+
+    def placed(self) -> list[tuple[str, SceneMesh, NDArray[np.float64]]]:
+        """Every node with a mesh: (node name, mesh, world transform in mm)."""
+        out = []
+
+        def walk(node: SceneNode, parent: NDArray[np.float64]) -> None:
+            T = parent @ node.transform
+            if node.mesh is not None:
+                out.append((node.name, self.meshes[node.mesh], T))
+            for c in node.children:
+                walk(c, T)
+
+        for n in self.nodes:
+            walk(n, np.eye(4))
+        return out
+
+
+#: Part materials (linear RGB): steel for screw and rollers, bearing bronze-tinted steel for
+#: the nut, darker steel for the gears.
+MATERIALS = {
+    "screw": Material("screw steel", (0.42, 0.48, 0.58, 1.0)),
+    "roller": Material("roller steel", (0.30, 0.50, 0.30, 1.0)),
+    "nut": Material("nut steel", (0.60, 0.42, 0.20, 1.0)),
+    "gear": Material("gear steel", (0.35, 0.35, 0.38, 1.0)),
+}
+
+
+def assembly_scene(asm: Any, title: str = "") -> Scene:
+    """The scene of a placed assembly: one mesh per distinct part mesh, one node per placed
+    part (``asm.placed`` order), materials by part family."""
+    meshes: dict[str, SceneMesh] = {}
+    by_id: dict[int, str] = {}
+    nodes = []
+    for name, (mesh, T, kind) in asm.placed.items():
+        family = "gear" if "gear" in name else name.split("_")[0]
+        if id(mesh) not in by_id:
+            # a mesh is named after its first placement without the roller index
+            base = name if not name.startswith("roller_") else "roller" + name[len("roller_") + 1:].lstrip("0123456789")
+            key = base if base not in meshes else f"{base}_{len(meshes)}"
+            by_id[id(mesh)] = key
+            meshes[key] = SceneMesh(key, np.asarray(mesh.vertices, dtype=np.float64),
+                                    np.asarray(mesh.faces, dtype=np.int64), family)
+        nodes.append(SceneNode(name, by_id[id(mesh)], np.asarray(T, dtype=np.float64)))
+    used = {m.material for m in meshes.values()}
+    return Scene(meshes, {k: v for k, v in MATERIALS.items() if k in used}, tuple(nodes), title)
+
+
+# --------------------------------------------------------------------------- normals
+def split_normals(vertices: NDArray[np.float64], faces: NDArray[np.int64],
+                  sharp_deg: float = SHARP_EDGE_DEG) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Vertices, unit normals and faces with the vertices split at sharp edges.
+
+    The corners of a vertex are grouped by the faces around it that are joined across
+    smooth edges (the two faces of an edge bend by at most ``sharp_deg``); each group is one
+    output vertex with the corner-angle-weighted mean normal of its faces. Smooth surfaces (the
+    helicoid at the chord tolerance) stay smooth; crests, roots and end faces stay crisp.
+    Linear in the number of faces (connected components of a sparse corner graph).
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    V = np.asarray(vertices, dtype=np.float64)
+    F = np.asarray(faces, dtype=np.int64)
+    nf = len(F)
+    fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])   # |fn| = 2 x area
+    unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-300)
+    # half-edges: face f, local corners i -> (i + 1) % 3
+    loc_a = np.tile([0, 1, 2], nf)
+    loc_b = np.tile([1, 2, 0], nf)
+    face = np.repeat(np.arange(nf), 3)
+    va, vb = F[face, loc_a], F[face, loc_b]
+    key = np.minimum(va, vb) * (len(V) + 1) + np.maximum(va, vb)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    # the two half-edges of a manifold edge are neighbours after sorting
+    twin = np.flatnonzero(ks[:-1] == ks[1:])
+    h1, h2 = order[twin], order[twin + 1]
+    smooth = np.einsum("ij,ij->i", unit[face[h1]], unit[face[h2]]) >= math.cos(math.radians(sharp_deg))
+    h1, h2 = h1[smooth], h2[smooth]
+    # corner ids 3 f + i; half-edge h1 = (a -> b) in f1 and h2 = (b -> a) in f2 (consistent
+    # winding): join corner of a in f1 with corner of a in f2, and b likewise
+    c1a, c1b = 3 * face[h1] + loc_a[h1], 3 * face[h1] + loc_b[h1]
+    c2a, c2b = 3 * face[h2] + loc_b[h2], 3 * face[h2] + loc_a[h2]
+    rows = np.concatenate([c1a, c1b])
+    cols = np.concatenate([c2a, c2b])
+    graph = coo_matrix((np.ones(len(rows), np.int8), (rows, cols)), shape=(3 * nf, 3 * nf))
+    _, group = connected_components(graph, directed=False)
+    # groups never span two vertices (joined corners share their vertex); renumber densely
+    uniq, inverse = np.unique(group, return_inverse=True)
+    # corner-angle weights: independent of how a surface was cut into triangles
+    e1 = V[np.roll(F, -1, axis=1)] - V[F]
+    e2 = V[np.roll(F, 1, axis=1)] - V[F]
+    cosang = np.einsum("fij,fij->fi", e1, e2) / np.maximum(
+        np.linalg.norm(e1, axis=2) * np.linalg.norm(e2, axis=2), 1e-300)
+    angle = np.arccos(np.clip(cosang, -1.0, 1.0)).ravel()
+    acc = np.zeros((len(uniq), 3))
+    np.add.at(acc, inverse, unit[np.arange(3 * nf) // 3] * angle[:, None])
+    normals = acc / np.maximum(np.linalg.norm(acc, axis=1, keepdims=True), 1e-300)
+    first = np.empty(len(uniq), np.int64)
+    first[inverse[::-1]] = np.arange(3 * nf)[::-1]
+    out_v = V[F.ravel()[first]]
+    return out_v, normals, inverse.reshape(-1, 3)
+
+
+# --------------------------------------------------------------------------- glTF
+def _decomposed(T: NDArray[np.float64], scale: float) -> dict[str, list[float]]:
+    """A rigid 4x4 (mm) as glTF translation (scaled to metres) and rotation quaternion."""
+    R = T[:3, :3]
+    if not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) <= 0:
+        raise ValueError("scene transforms must be rigid rotations with translation")
+    w = math.sqrt(max(0.0, 1.0 + R[0, 0] + R[1, 1] + R[2, 2])) / 2.0
+    x = math.copysign(math.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2.0, R[2, 1] - R[1, 2])
+    y = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2.0, R[0, 2] - R[2, 0])
+    z = math.copysign(math.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2.0, R[1, 0] - R[0, 1])
+    q = np.array([x, y, z, w])
+    q /= np.linalg.norm(q)
+    out: dict[str, list[float]] = {}
+    t = T[:3, 3] * scale
+    if np.any(t != 0.0):
+        out["translation"] = [float(v) for v in t]
+    if not np.allclose(q, [0, 0, 0, 1], atol=0, rtol=0):
+        out["rotation"] = [float(v) for v in q]
+    return out
+
+
+def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
+    """The scene as a glTF 2.0 binary (see the module docstring for the conventions)."""
+    scale = 1e-3                                   # mm -> m
+    blob = bytearray()
+    views: list[dict[str, Any]] = []
+    accessors: list[dict[str, Any]] = []
+
+    def add(data: bytes, target: int) -> int:
+        while len(blob) % 4:
+            blob.append(0)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": target})
+        blob.extend(data)
+        return len(views) - 1
+
+    materials = list(scene.materials)
+    gl_materials = [{"name": m.name, "pbrMetallicRoughness": {
+        "baseColorFactor": list(m.colour), "metallicFactor": m.metallic, "roughnessFactor": m.roughness}}
+        for m in scene.materials.values()]
+    gl_meshes, mesh_index = [], {}
+    for key, sm in scene.meshes.items():
+        V, N, F = split_normals(sm.vertices, sm.faces, sharp_deg)
+        pos = (V * scale).astype(np.float32)
+        nrm = N.astype(np.float32)
+        idx = F.astype(np.uint32)
+        accessors.append({"bufferView": add(pos.tobytes(), 34962), "componentType": 5126, "count": len(pos),
+                          "type": "VEC3", "min": [float(v) for v in pos.min(0)], "max": [float(v) for v in pos.max(0)]})
+        accessors.append({"bufferView": add(nrm.tobytes(), 34962), "componentType": 5126, "count": len(nrm),
+                          "type": "VEC3"})
+        accessors.append({"bufferView": add(idx.tobytes(), 34963), "componentType": 5125, "count": idx.size,
+                          "type": "SCALAR"})
+        a = len(accessors)
+        gl_meshes.append({"name": key, "primitives": [{"attributes": {"POSITION": a - 3, "NORMAL": a - 2},
+                                                        "indices": a - 1, "mode": 4,
+                                                        "material": materials.index(sm.material)}]})
+        mesh_index[key] = len(gl_meshes) - 1
+    gl_nodes: list[dict[str, Any]] = [{"name": "prs_geom", "rotation": list(Z_UP_TO_Y_UP), "children": []}]
+
+    def add_node(node: SceneNode) -> int:
+        entry: dict[str, Any] = {"name": node.name, **_decomposed(node.transform, scale)}
+        if node.mesh is not None:
+            entry["mesh"] = mesh_index[node.mesh]
+        gl_nodes.append(entry)
+        i = len(gl_nodes) - 1
+        if node.children:
+            entry["children"] = [add_node(c) for c in node.children]
+        return i
+
+    gl_nodes[0]["children"] = [add_node(n) for n in scene.nodes]
+    doc = {"asset": {"version": "2.0", "generator": f"prs_geom {__version__}"},
+           "scene": 0, "scenes": [{"name": scene.title or "prs_geom assembly", "nodes": [0]}],
+           "nodes": gl_nodes, "meshes": gl_meshes, "materials": gl_materials,
+           "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}]}
+    js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
+    js += b" " * (-len(js) % 4)
+    blob.extend(b"\0" * (-len(blob) % 4))
+    total = 12 + 8 + len(js) + 8 + len(blob)
+    return b"".join([struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(js), b"JSON"), js,
+                     struct.pack("<I4s", len(blob), b"BIN\0"), bytes(blob)])
+
+
+def write_glb(scene: Scene, path: Path | str) -> None:
+    Path(path).write_bytes(glb_bytes(scene))
+
+
+# --------------------------------------------------------------------------- 3MF
+def _uuid(*parts: str) -> str:
+    return str(uuid.UUID(hashlib.sha256("\0".join(parts).encode()).hexdigest()[:32]))
+
+
+def write_3mf(scene: Scene, path: Path | str) -> None:
+    """Write the scene as 3MF with lib3mf (unit millimetre; see the module docstring)."""
+    import lib3mf
+
+    wrapper = lib3mf.get_wrapper()
+    model = wrapper.CreateModel()
+    model.SetUnit(lib3mf.ModelUnit.MilliMeter)
+    group = model.AddBaseMaterialGroup()
+    prop = {}
+    for key, m in scene.materials.items():
+        r, g, b, a = (int(h, 16) for h in (m.srgb_hex[1:3], m.srgb_hex[3:5], m.srgb_hex[5:7], m.srgb_hex[7:9]))
+        prop[key] = group.AddMaterial(m.name, wrapper.RGBAToColor(r, g, b, a))
+    objects = {}
+    for key, sm in scene.meshes.items():
+        obj = model.AddMeshObject()
+        obj.SetName(key)
+        V = np.ascontiguousarray(sm.vertices, dtype=np.float32)
+        F = np.ascontiguousarray(sm.faces, dtype=np.uint32)
+        # one call with the whole arrays (lib3mf's Python wrapper would box every vertex)
+        vbuf = (lib3mf.Position * len(V)).from_buffer_copy(V.tobytes())
+        fbuf = (lib3mf.Triangle * len(F)).from_buffer_copy(F.tobytes())
+        wrapper.checkError(obj, wrapper.lib.lib3mf_meshobject_setgeometry(
+            obj._handle, ctypes.c_uint64(len(V)), vbuf, ctypes.c_uint64(len(F)), fbuf))
+        obj.SetObjectLevelProperty(group.GetResourceID(), prop[sm.material])
+        obj.SetUUID(_uuid("object", key, hashlib.sha256(V.tobytes() + F.tobytes()).hexdigest()))
+        objects[key] = obj
+    for name, sm, T in scene.placed():
+        t = lib3mf.Transform()
+        for col in range(4):
+            for row in range(3):
+                # lib3mf's Fields[i][j]: row i of the 4x3 matrix acting on row vectors
+                t.Fields[col][row] = float(T[row, col])
+        item = model.AddBuildItem(objects[sm.name], t)
+        item.SetUUID(_uuid("item", name))
+        item.SetPartNumber(name)
+    model.SetBuildUUID(_uuid("build", scene.title, *[n for n, _, _ in scene.placed()]))
+    meta = model.GetMetaDataGroup()
+    meta.AddMetaData("", "Title", scene.title or "prs_geom assembly", "string", True)
+    meta.AddMetaData("", "Application", f"prs_geom {__version__}", "string", True)
+    writer = model.QueryWriter("3mf")
+    writer.SetDecimalPrecision(9)
+    tmp = Path(path).with_name(Path(path).name + ".part")
+    with _locale_kept():
+        writer.WriteToFile(str(tmp))
+    os.replace(tmp, path)
+
+
+@contextmanager
+def _locale_kept():
+    """Restore the process locale after lib3mf, whose writer and reader set it to "C" for
+    every category and leave it so: Python's default text encoding would turn to ASCII
+    for the rest of the process."""
+    saved = locale.setlocale(locale.LC_ALL, None)
+    try:
+        yield
+    finally:
+        locale.setlocale(locale.LC_ALL, saved)

@@ -1,0 +1,265 @@
+"""CAD deliverables read back by independent readers (issue 15): STL, GLB, 3MF.
+
+One default build (with ``--screw nominal``) is read back with trimesh (STL, GLB), the
+Khronos glTF validator (npm ``gltf-validator``, where node is present) and lib3mf (3MF).
+"""
+import json
+import math
+import os
+import shutil
+import struct
+import subprocess
+from pathlib import Path
+
+import manifold3d
+import numpy as np
+import pytest
+import trimesh
+
+from prs_geom.exports.meshes import stl_bytes
+from prs_geom.exports.scene import split_normals
+from prs_geom.geometry.frames import roller_transform
+from prs_geom.mesh.thread import axial_line_crossings
+from prs_geom.model.design import default_design
+from prs_geom.model.io import design_hash
+from prs_geom.pipeline import BuildOptions, build
+
+NODE = shutil.which("node")
+VALIDATOR = Path(os.environ.get("PRS_GLTF_VALIDATOR",
+                                Path(__file__).resolve().parent.parent / ".ci" / "node" / "node_modules"
+                                / "gltf-validator"))
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    out = tmp_path_factory.mktemp("scene") / "out"
+    d = default_design()
+    report = build(d, out, options=BuildOptions(nominal_screw=True))
+    return d, out, report
+
+
+def _stl(path: Path) -> trimesh.Trimesh:
+    """An STL read back by trimesh, its vertices merged (STL stores a triangle soup)."""
+    m = trimesh.load(path, file_type="stl", process=False)
+    m.merge_vertices(merge_tex=True, merge_norm=True)
+    return m
+
+
+def _manifold(V, F):
+    m = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(V, dtype=np.float64),
+                                              np.ascontiguousarray(F, dtype=np.uint64)))
+    assert m.status() == manifold3d.Error.NoError and m.volume() > 0   # a solid, not an empty set
+    return m
+
+
+# --------------------------------------------------------------------------- STL
+def test_exported_screw_is_the_theoretical_one(built):
+    """screw.stl: its largest radius is the major radius, and its axial section at the
+    theoretical pitch radius has tooth and groove each p/2 wide (the nominal screw's tooth
+    is wider there); screw_nominal.stl is the nominal screw."""
+    d, out, report = built
+    r_th = 0.5 * report["contact"]["screw_roller"]["theoretical_pitch_diameter_mm"]
+    for name, r_pitch in (("screw.stl", r_th), ("screw_nominal.stl", 0.5 * d.screw.pitch_diameter_mm)):
+        m = _stl(out / name)
+        r = np.hypot(m.vertices[:, 0], m.vertices[:, 1])
+        assert r.max() == pytest.approx(0.5 * d.screw.major_diameter_mm, abs=1e-5)   # float32 in STL
+        # the line (r_pitch, 0, z) pierces the flanks of the section at theta = 0
+        xs = axial_line_crossings(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces), r_pitch, 0.0)
+        assert len(xs) > 20
+        widths = np.diff(np.sort(xs))
+        # 5-start screw, pitch p: the section shows every pitch p/2 + p/2 (the chord error of
+        # the 0.01 mm mesh moves a crossing by at most tol / tan(beta) = 0.01 mm)
+        np.testing.assert_allclose(widths, 0.5 * d.thread.pitch_mm, atol=0.012)
+    th = _stl(out / "screw.stl")
+    nom = _stl(out / "screw_nominal.stl")
+    # the theoretical screw is thinner at the same radius: less volume
+    assert th.volume < nom.volume - 1.0
+
+
+def test_stl_header_and_vectorised_writer_read_back(built):
+    d, out, report = built
+    head = (out / "roller.stl").read_bytes()[:80].decode("ascii")
+    assert head.startswith("prs_geom roller; units mm; part frame; design sha256 " + design_hash(d))
+    # the writer against trimesh's reader: same triangles (float32), normals of unit length
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    data = stl_bytes(V, F, "test tetrahedron")
+    assert len(data) == 84 + 50 * 4 and struct.unpack("<I", data[80:84])[0] == 4
+    m = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="stl", process=False)
+    np.testing.assert_array_equal(m.triangles, V[F].astype(np.float32))
+    assert m.volume == pytest.approx(1 / 6, rel=1e-7) and m.is_winding_consistent
+    with pytest.raises(ValueError, match="solid"):
+        stl_bytes(V, F, "solid part")
+
+
+def test_exported_parts_do_not_interfere_and_the_nominal_screw_does(built):
+    """The interference check run on the exported files themselves: each roller (roller.stl
+    placed by its 3MF build-item transform) against screw.stl and nut.stl. The designed
+    state touches along the contacts only: mean overlap thickness 2V/A within twice the
+    chord tolerance. With screw_nominal.stl every roller overlaps the screw by far more."""
+    d, out, report = built
+    tol = d.mesh.chord_tolerance_mm
+    screw, nut, roller = (_stl(out / f"{n}.stl") for n in ("screw", "nut", "roller"))
+    nominal = _stl(out / "screw_nominal.stl")
+    items = _read_3mf(out / "assembly.3mf")["items"]
+    S, N, R = (_manifold(m.vertices, m.faces) for m in (screw, nut, roller))
+    SN = _manifold(nominal.vertices, nominal.faces)
+    for k in range(d.roller.count):
+        T = items[f"roller_{k}"]
+        Rk = R.transform(np.ascontiguousarray(T[:3, :4]))
+        for other, what in ((S, "screw"), (N, "nut")):
+            inter = Rk ^ other
+            vol = inter.volume()
+            thick = 2 * vol / inter.surface_area() if vol > 0 else 0.0
+            assert thick <= 2 * tol, (k, what, vol, thick)
+        bad = Rk ^ SN
+        assert bad.volume() > 0.1 and 2 * bad.volume() / bad.surface_area() > 2 * tol
+
+
+# --------------------------------------------------------------------------- GLB
+def _glb_json(path: Path) -> dict:
+    data = path.read_bytes()
+    magic, version, total = struct.unpack("<4sII", data[:12])
+    assert magic == b"glTF" and version == 2 and total == len(data)
+    n, kind = struct.unpack("<I4s", data[12:20])
+    assert kind == b"JSON"
+    return json.loads(data[20:20 + n])
+
+
+def test_glb_is_metres_y_up_named_with_materials_and_normals(built):
+    d, out, report = built
+    doc = _glb_json(out / "assembly.glb")
+    scene = trimesh.load(out / "assembly.glb")          # an independent reader applies the nodes
+    lo, hi = scene.bounds
+    ext = hi - lo
+    # metres: the nut's outer diameter across x and z, the screw length along +Y (the axis)
+    assert ext[0] == pytest.approx(d.nut.outer_diameter_mm * 1e-3, rel=1e-3)
+    assert ext[2] == pytest.approx(d.nut.outer_diameter_mm * 1e-3, rel=1e-3)
+    assert ext[1] == pytest.approx(max(d.screw.length_mm, d.thread.engaged_teeth * d.thread.pitch_mm + 4 * d.thread.pitch_mm) * 1e-3, rel=1e-3)
+    names = {n["name"] for n in doc["nodes"]}
+    assert {"screw", "nut"} | {f"roller_{k}" for k in range(d.roller.count)} <= names
+    roller_meshes = {n["mesh"] for n in doc["nodes"] if n["name"] in {f"roller_{k}" for k in range(d.roller.count)}}
+    assert len(roller_meshes) == 1                       # one roller mesh, placed z times
+    assert len(doc["materials"]) >= 3
+    for m in doc["materials"]:
+        pbr = m["pbrMetallicRoughness"]
+        assert len(pbr["baseColorFactor"]) == 4 and 0 <= pbr["metallicFactor"] <= 1
+    for mesh in doc["meshes"]:
+        prim = mesh["primitives"][0]
+        assert "NORMAL" in prim["attributes"] and "material" in prim
+    text = json.dumps(doc)
+    assert "extras" not in text and "extensions" not in text
+    # roller 3's node places it where the frames say (translation in metres)
+    node = next(n for n in doc["nodes"] if n["name"] == "roller_3")
+    np.testing.assert_allclose(node["translation"], roller_transform(d, 3)[:3, 3] * 1e-3, atol=1e-12)
+
+
+def test_split_normals_keep_sharp_edges_and_smooth_surfaces():
+    box = trimesh.creation.box([1, 2, 3])
+    V, N, F = split_normals(box.vertices, box.faces)
+    assert len(V) == 24                                   # every corner of a cube is sharp
+    np.testing.assert_allclose(np.abs(N).max(axis=1), 1.0, atol=1e-12)
+    cyl = trimesh.creation.cylinder(radius=1.0, height=2.0, sections=64)
+    V, N, F = split_normals(cyl.vertices, cyl.faces)
+    side = np.abs(N[:, 2]) < 1e-9
+    # side normals are radial (smooth across the 5.6 deg facets), caps axial
+    np.testing.assert_allclose(N[side][:, :2], V[side][:, :2] / np.hypot(V[side][:, 0], V[side][:, 1])[:, None],
+                               atol=1e-12)
+    assert np.all(np.abs(np.abs(N[~side][:, 2]) - 1) < 1e-12)
+    # same triangles as before, only the vertices split
+    np.testing.assert_allclose(V[F], cyl.vertices[cyl.faces], atol=0)
+
+
+@pytest.mark.skipif(NODE is None, reason="node not installed (the Khronos glTF validator runs on node)")
+def test_glb_passes_the_khronos_validator(built, tmp_path):
+    if not (VALIDATOR / "package.json").exists():
+        if os.environ.get("CI"):
+            raise RuntimeError(f"CI must install gltf-validator at {VALIDATOR} (see .ci/run)")
+        pytest.skip(f"gltf-validator not installed at {VALIDATOR} (npm install --prefix .ci/node gltf-validator)")
+    d, out, report = built
+    script = tmp_path / "validate.js"
+    script.write_text(
+        "const v = require(process.argv[2]); const fs = require('fs');\n"
+        "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[3]))).then(r => {\n"
+        "  console.log(JSON.stringify(r.issues)); }).catch(e => { console.error(e); process.exit(3); });\n")
+    r = subprocess.run([NODE, str(script), str(VALIDATOR), str(out / "assembly.glb")],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    issues = json.loads(r.stdout)
+    assert issues["numErrors"] == 0, issues["messages"][:10]
+    assert issues["numWarnings"] == 0, issues["messages"][:10]
+
+
+# --------------------------------------------------------------------------- 3MF
+def _read_3mf(path: Path) -> dict:
+    import lib3mf
+
+    import locale
+
+    w = lib3mf.get_wrapper()
+    model = w.CreateModel()
+    saved = locale.setlocale(locale.LC_ALL, None)
+    try:
+        model.QueryReader("3mf").ReadFromFile(str(path))
+    finally:
+        locale.setlocale(locale.LC_ALL, saved)    # lib3mf leaves the C locale behind
+    objects = {}
+    it = model.GetMeshObjects()
+    while it.MoveNext():
+        o = it.GetCurrentMeshObject()
+        V = np.array([list(p.Coordinates) for p in o.GetVertices()], dtype=np.float64)
+        F = np.array([list(t.Indices) for t in o.GetTriangleIndices()], dtype=np.int64)
+        objects[o.GetName()] = (V, F, o.GetResourceID())
+    items, item_object = {}, {}
+    bi = model.GetBuildItems()
+    while bi.MoveNext():
+        b = bi.GetCurrent()
+        f = b.GetObjectTransform().Fields
+        T = np.eye(4)
+        for col in range(4):
+            for row in range(3):
+                T[row, col] = f[col][row]
+        items[b.GetPartNumber()] = T
+        item_object[b.GetPartNumber()] = b.GetObjectResource().GetName()
+    return {"unit": model.GetUnit(), "objects": objects, "items": items, "item_object": item_object,
+            "millimetre": lib3mf.ModelUnit.MilliMeter}
+
+
+def test_3mf_reads_back_with_one_object_per_part_in_millimetres(built):
+    d, out, report = built
+    m = _read_3mf(out / "assembly.3mf")
+    assert m["unit"] == m["millimetre"]
+    assert {"screw", "nut", "roller"} <= set(m["objects"])
+    rollers = [f"roller_{k}" for k in range(d.roller.count)]
+    assert {m["item_object"][r] for r in rollers} == {"roller"}     # one mesh, z build items
+    assert set(m["items"]) == set(report["assembly"]["parts"])
+    for k in (0, 3):
+        # lib3mf keeps transforms as float32 and writes them with 6 decimals: ~5 nm here
+        np.testing.assert_allclose(m["items"][f"roller_{k}"], roller_transform(d, k), atol=1e-5)
+    # volumes equal the per-part STLs' (both float32 coordinates)
+    for name in ("screw", "roller", "nut"):
+        V, F, _ = m["objects"][name]
+        vol = trimesh.Trimesh(V, F, process=False).volume
+        # lib3mf writes float32 coordinates rounded to about 8 significant digits: each vertex
+        # may move by up to one float32 step (4e-6 mm at these radii) from the STL's, so the
+        # volumes agree within surface area x 4e-6 mm
+        stl = trimesh.load(out / f"{name}.stl", file_type="stl", process=False)
+        assert abs(vol - stl.volume) <= stl.area * 4e-6, (name, vol, stl.volume)
+        assert vol == pytest.approx(next(r["volume_mm3"] for r in report["checks"]["meshes"]
+                                         if r["part"] == name), rel=1e-6)
+
+
+def test_writing_3mf_leaves_the_process_locale_as_it_was(tmp_path):
+    """lib3mf sets the C locale and leaves it; the writer restores it (else every later text
+    file of the process would be written as ASCII)."""
+    import locale
+
+    from prs_geom.exports.scene import Scene, SceneMesh, SceneNode, MATERIALS, write_3mf
+
+    before = locale.setlocale(locale.LC_ALL, None)
+    box = trimesh.creation.box([1, 1, 1])
+    scene = Scene({"box": SceneMesh("box", box.vertices, box.faces, "screw")}, {"screw": MATERIALS["screw"]},
+                  (SceneNode("box", "box"),), "locale test")
+    write_3mf(scene, tmp_path / "box.3mf")
+    assert locale.setlocale(locale.LC_ALL, None) == before
+    assert _read_3mf(tmp_path / "box.3mf")["objects"]["box"][0].shape == (8, 3)
