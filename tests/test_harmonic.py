@@ -191,3 +191,307 @@ def test_invalid_harmonic_field_gives_exit_2_and_no_output(field, value):
         code, _, err = run(["build", str(f), "--out", str(out), "--quiet"])
         assert code == 2 and err.startswith(f"error: {field}"), err
         assert not out.exists()
+
+
+# --------------------------------------------------------------------------- placed assembly
+# The drive placed at one input position a (prs_geom/harmonic/assembly.py): the flexspline
+# deformed by the wave generator, its files (STL, GLB, 3MF) read back by independent readers
+# and report.html parsed back and opened in a browser.
+import re
+import shutil
+import subprocess
+
+import manifold3d
+
+from prs_geom._version import __version__
+from prs_geom.harmonic.assembly import (assembly_checks, build_assembly, default_position, deform,
+                                        inner_wall_radius, meridian_tilt, wave_generator)
+from prs_geom.harmonic.exports import harmonic_outputs
+from prs_geom.harmonic.model import harmonic_report
+from prs_geom.model.io import design_hash
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+ASSEMBLY_FILES = ("flexspline_placed.stl", "wave_generator.stl", "assembly.glb", "assembly.3mf", "report.html")
+
+
+@pytest.fixture(scope="module")
+def placed(tmp_path_factory):
+    """A default harmonic build with the placed-assembly outputs (written by the build once
+    the pipeline calls harmonic_outputs; until then, here, as the pipeline will)."""
+    d = HarmonicDesign()
+    out = tmp_path_factory.mktemp("placed") / "out"
+    report = build(d, out)
+    if "report.html" not in report["files"]:
+        report["files"] += harmonic_outputs(d, out, report, "2024-01-02", __version__)
+    return d, out, report
+
+
+def _stl(path: Path) -> trimesh.Trimesh:
+    m = trimesh.load(path, file_type="stl", process=False)
+    m.merge_vertices(merge_tex=True, merge_norm=True)
+    return m
+
+
+def _solid(V, F):
+    m = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(V, dtype=np.float64),
+                                              np.ascontiguousarray(F, dtype=np.uint64)))
+    assert m.status() == manifold3d.Error.NoError and m.volume() > 0
+    return m
+
+
+def _read_3mf(path: Path) -> dict:
+    """Objects (vertices, faces) and build items (4x4 transform, object name) by lib3mf."""
+    import lib3mf
+
+    w = lib3mf.get_wrapper()
+    model = w.CreateModel()
+    model.QueryReader("3mf").ReadFromFile(str(path))
+    objects = {}
+    it = model.GetMeshObjects()
+    while it.MoveNext():
+        o = it.GetCurrentMeshObject()
+        V = np.array([list(p.Coordinates) for p in o.GetVertices()], dtype=np.float64)
+        F = np.array([list(t.Indices) for t in o.GetTriangleIndices()], dtype=np.int64)
+        objects[o.GetName()] = (V, F)
+    items, item_object = {}, {}
+    bi = model.GetBuildItems()
+    while bi.MoveNext():
+        b = bi.GetCurrent()
+        f = b.GetObjectTransform().Fields
+        T = np.eye(4)
+        for col in range(4):
+            for row in range(3):
+                T[row, col] = f[col][row]
+        items[b.GetPartNumber()] = T
+        item_object[b.GetPartNumber()] = b.GetObjectResource().GetName()
+    return {"unit": model.GetUnit(), "mm": lib3mf.ModelUnit.MilliMeter, "objects": objects, "items": items,
+            "item_object": item_object}
+
+
+def test_deformation_reproduces_the_model_section_on_the_major_axis():
+    """Independent formula: the tilted arc centre of the ratio model (docs/theory/harmonic.md)
+    is where the deformation takes the undeformed arc centre, on both lobes; on the minor
+    axis the tilt is reversed; the mean radial displacement of the open end is zero to first
+    order (an inextensible end)."""
+    d = HarmonicDesign()
+    f = d.flexspline
+    a = default_position(d)
+    assert a == 0.5 * (d.positions.min_mm + d.positions.max_mm) == 58.0
+    beta = float(tilt_angle(d, a))
+    xc = d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta)
+    rc = f.neutral_radius_mm + d.x_s * math.sin(beta) - f.arc_centre_offset_mm * math.cos(beta)
+    r_u = f.neutral_radius_mm - f.arc_centre_offset_mm
+    p = deform(d, r_u, d.x_s, np.array([0.0, math.pi]), beta)
+    np.testing.assert_allclose(p, [[rc, 0.0, xc], [-rc, 0.0, xc]], atol=1e-12)
+    assert float(meridian_tilt(beta, math.pi / 2)) == pytest.approx(-beta, abs=1e-15)
+    th = np.linspace(0, 2 * math.pi, 4096, endpoint=False)
+    end = deform(d, f.neutral_radius_mm, f.length_mm, th, beta)
+    w = np.hypot(end[:, 0], end[:, 1]) - f.neutral_radius_mm
+    assert abs(w.mean()) < 0.5 * f.length_mm * beta ** 2 and w.max() == pytest.approx(f.length_mm * math.sin(beta))
+
+
+def test_wave_generator_touches_on_four_lines_and_clears_elsewhere():
+    d = HarmonicDesign()
+    a = default_position(d)
+    beta = float(tilt_angle(d, a))
+    wg = wave_generator(d, a)
+    f = d.flexspline
+    # the band sits under the contact, on the inner wall (arc centre station +- r_s / 2)
+    assert (wg.z_min_mm, wg.z_max_mm) == pytest.approx((d.x_s - 7.5, d.x_s + 7.5))
+    # inner wall line in the tilted meridian, written out: foot (r0 - t/2) turned about A
+    h = f.wall_thickness_mm / 2
+
+    def wall(b, z):
+        foot = np.array([f.neutral_radius_mm - h * math.cos(b), h * math.sin(b)])
+        return foot[0] + (z - foot[1]) * math.tan(b)
+    assert wg.semi_axis_x_mm == pytest.approx(wall(beta, wg.z_min_mm), abs=1e-12)     # outward wall: lower edge
+    assert wg.semi_axis_y_mm == pytest.approx(wall(-beta, wg.z_max_mm), abs=1e-12)    # inward wall: upper edge
+    assert wg.semi_axis_x_mm > f.neutral_radius_mm - h > wg.semi_axis_y_mm
+    th = np.linspace(0, 2 * math.pi, 3601)
+    b = meridian_tilt(beta, th)
+    clear = np.minimum(inner_wall_radius(d, b, wg.z_min_mm), inner_wall_radius(d, b, wg.z_max_mm)) - wg.radius(th)
+    assert clear.min() > -1e-9
+    assert clear[[0, 900, 1800, 2700]] == pytest.approx(0.0, abs=1e-9)
+    assert 0.05 < clear.max() < 0.5
+
+
+@pytest.mark.parametrize("a", [42.0, 73.5])
+def test_placed_assembly_at_other_positions_touches_without_interference(a):
+    d = HarmonicDesign()
+    asm = build_assembly(d, a, tol=0.02)
+    c = assembly_checks(asm)
+    assert asm.position_mm == a and asm.beta_rad == pytest.approx(float(tilt_angle(d, a)))
+    assert 0.0 <= c["contact_gap_mm"] <= 0.5 * 0.02
+    assert c["contact_offset_mm"] <= 0.02
+    assert not c["interference"]["found"] and c["warnings"] == []
+    assert c["arc_cone_clearance_min_mm"] == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(DesignError):
+        build_assembly(d, 80.0)
+
+
+def test_harmonic_outputs_files_and_report_keys(placed):
+    d, out, report = placed
+    for f in ASSEMBLY_FILES:
+        assert (out / f).is_file() and f in report["files"], f
+    asm = report["assembly"]
+    assert asm["position_mm"] == 58.0 and asm["parts"] == ["circular_spline", "flexspline", "wave_generator"]
+    assert asm["beta_deg"] == pytest.approx(math.degrees(float(tilt_angle(d, 58.0))), rel=1e-12)
+    assert asm["wave_amplitude_mm"] == pytest.approx(d.flexspline.length_mm * math.sin(math.radians(asm["beta_deg"])))
+    assert asm["placement_z_mm"] == {"circular_spline": 58.0, "flexspline": 0.0,
+                                     "wave_generator": asm["wave_generator"]["z_min_mm"]}
+    for row in asm["meshes"]:
+        assert row["watertight"] and row["max_deviation_mm"] <= row["chord_tolerance_mm"], row
+    assert report["checks"]["assembly"]["warnings"] == [] and report["warnings"] == []
+    head = (out / "flexspline_placed.stl").read_bytes()[:80].decode("ascii")
+    assert head.startswith("prs_geom flexspline placed; units mm; assembly frame; design sha256 " + design_hash(d))
+
+
+def test_placed_flexspline_touches_the_cone_at_the_model_contact_point(placed):
+    """From flexspline_placed.stl alone: its mesh edges in the major-axis half plane
+    (theta = 0, and theta = pi mirrored) pass within the chord tolerance of the model's
+    contact point, and their vertices stay inside the cone of the circular spline placed at a,
+    the nearest within the tolerance."""
+    d, out, report = placed
+    tol = d.mesh.chord_tolerance_mm
+    a = report["assembly"]["position_mm"]
+    x_c, r_c = contact_point(d, a)
+    m = _stl(out / "flexspline_placed.stl")
+    V = np.asarray(m.vertices, dtype=np.float64)
+    c = d.circular_spline
+    for sign in (1.0, -1.0):
+        on = (np.abs(V[:, 1]) < 1e-9) & (sign * V[:, 0] > 0)      # sin(pi) r is not 0 exactly
+        E = m.edges_unique
+        E = E[on[E[:, 0]] & on[E[:, 1]]]
+        P, Q = V[E[:, 0]][:, [0, 2]] * [sign, 1], V[E[:, 1]][:, [0, 2]] * [sign, 1]     # (r, z)
+        p = np.array([r_c, x_c])
+        t = np.clip(np.einsum("ij,ij->i", p - P, Q - P) / np.einsum("ij,ij->i", Q - P, Q - P), 0, 1)
+        dist = np.linalg.norm(P + t[:, None] * (Q - P) - p, axis=1).min()
+        assert dist <= tol, dist
+        rz = V[on][:, [0, 2]] * [sign, 1]
+        rz = rz[(rz[:, 1] >= a) & (rz[:, 1] <= a + c.bore_length_mm)]
+        cone = c.bore_small_radius_mm + (rz[:, 1] - a) * math.tan(d.alpha)
+        gap = (cone - rz[:, 0]) * math.cos(d.alpha)          # normal distance to the cone line
+        assert -1e-5 <= gap.min() <= 0.5 * tol, gap.min()    # float32 STL coordinates
+    assert report["checks"]["assembly"]["contact_gap_mm"] == pytest.approx(gap.min(), abs=1e-5)
+
+
+def test_assembly_read_back_from_3mf_has_no_interference_and_matches_the_stls(placed):
+    d, out, report = placed
+    tol = d.mesh.chord_tolerance_mm
+    m = _read_3mf(out / "assembly.3mf")
+    assert m["unit"] == m["mm"]
+    assert set(m["objects"]) == set(m["items"]) == {"circular_spline", "flexspline", "wave_generator"}
+    assert m["item_object"] == {k: k for k in m["items"]}
+    a = report["assembly"]["position_mm"]
+    np.testing.assert_allclose(m["items"]["circular_spline"][:3, 3], [0, 0, a], atol=1e-9)
+    np.testing.assert_allclose(m["items"]["flexspline"], np.eye(4), atol=0)
+    for name, stl in (("circular_spline", "circular_spline.stl"), ("flexspline", "flexspline_placed.stl"),
+                      ("wave_generator", "wave_generator.stl")):
+        V, F = m["objects"][name]
+        ref = _stl(out / stl)
+        # both hold float32-sized coordinates, but lib3mf's decimal text does not round-trip
+        # float32 exactly (53.0 is written 52.999999488): one float32 step at 32..64 mm
+        # (3.8e-6 mm) over the surface bounds the volume difference
+        assert len(F) == len(ref.faces)
+        assert abs(trimesh.Trimesh(V, F, process=False).volume - ref.volume) <= ref.area * 3.9e-6
+    solids = {}
+    for name, (V, F) in m["objects"].items():
+        T = m["items"][name]
+        solids[name] = _solid(V @ T[:3, :3].T + T[:3, 3], F)
+    for p, q in (("circular_spline", "flexspline"), ("flexspline", "wave_generator"),
+                 ("circular_spline", "wave_generator")):
+        inter = solids[p] ^ solids[q]
+        vol = inter.volume()
+        thick = 2 * vol / inter.surface_area() if vol > 0 else 0.0
+        assert thick <= 2 * tol, (p, q, vol, thick)
+    # the check sees interference: the ring moved 2 mm further (narrower bore at the contact)
+    V, F = m["objects"]["circular_spline"]
+    moved = _solid(V + [0, 0, a + 2.0], F) ^ solids["flexspline"]
+    assert 2 * moved.volume() / moved.surface_area() > 2 * tol
+    # the deformed flexspline keeps the undeformed volume to second order in the tilt
+    beta = math.radians(report["assembly"]["beta_deg"])
+    undeformed = next(r for r in report["checks"]["meshes"] if r["part"] == "flexspline")["volume_mm3"]
+    assert abs(_stl(out / "flexspline_placed.stl").volume / undeformed - 1) < beta ** 2
+
+
+def test_glb_has_three_named_parts_in_metres_y_up(placed):
+    import struct
+    d, out, report = placed
+    data = (out / "assembly.glb").read_bytes()
+    n = struct.unpack("<I", data[12:16])[0]
+    doc = json.loads(data[20:20 + n])
+    nodes = {nd["name"]: nd for nd in doc["nodes"]}
+    assert {"circular_spline", "flexspline", "wave_generator"} <= set(nodes)
+    a = report["assembly"]["position_mm"]
+    np.testing.assert_allclose(nodes["circular_spline"]["translation"], [0, 0, a * 1e-3], atol=1e-15)
+    scene = trimesh.load(out / "assembly.glb")
+    assert {"circular_spline", "flexspline", "wave_generator"} <= set(scene.graph.nodes_geometry)
+    lo, hi = scene.bounds
+    c = d.circular_spline
+    # Y up = the drive's axis: flexspline bottom (0) to the ring's far end (a + H); the ring's
+    # outer diameter across x and z
+    assert lo[1] == pytest.approx(0.0, abs=1e-5) and hi[1] == pytest.approx((a + c.bore_length_mm) * 1e-3, rel=1e-6)
+    assert hi[0] - lo[0] == pytest.approx(2 * c.outer_radius_mm * 1e-3, rel=1e-6)
+    assert hi[2] - lo[2] == pytest.approx(2 * c.outer_radius_mm * 1e-3, rel=1e-4)
+    assert len(doc["materials"]) == 3
+
+
+def _table_rows(page: str, table_id: str) -> list[list[str]]:
+    body = re.search(rf"<table id='{table_id}'>(.*?)</table>", page, re.S).group(1)
+    return [re.findall(r"<td[^>]*>(.*?)</td>", r) for r in re.findall(r"<tr>(.*?)</tr>", body) if "<td" in r]
+
+
+def test_report_html_holds_the_ratio_table_at_full_precision_and_is_self_contained(placed):
+    d, out, report = placed
+    page = (out / "report.html").read_text(encoding="utf-8")
+    ref = harmonic_report(d)
+    keys = ["a_mm", "beta_deg", "phi_deg", "contact_radius_mm", "cone_radius_mm", "radius_difference_mm", "ratio"]
+    rows = _table_rows(page, "ratio-table")
+    assert len(rows) == len(ref["table"]) == 65
+    for cells, row in zip(rows, ref["table"]):
+        assert [float(c) for c in cells] == [row[k] for k in keys]          # exact: shortest repr
+    speed = {c[0]: float(c[1]) for c in _table_rows(page, "speed-range")}
+    assert speed["speed range"] == ref["speed_range"] and speed["ratio at positions.max_mm"] == ref["ratio_max"]
+    assert design_hash(d) in page and __version__ in page
+    assert not re.search(r"""(src|href)\s*=\s*["'](https?:|//|/|\.\.?/)""", page)
+    assert "<link" not in page and "@import" not in page and "<script src" not in page
+    assert page.count("<svg") == 1 and "scene-data" in page and "<canvas id='view'" in page
+    scene = json.loads(re.search(r"<script type='application/json' id='scene-data'>(.*?)</script>", page,
+                                 re.S).group(1).replace("<\\/", "</"))
+    assert [i["name"] for i in scene["instances"]] == ["circular_spline", "flexspline", "wave_generator"]
+    assert [i["cut"] for i in scene["instances"]] == [True, True, False]
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed (apt-get install chromium)")
+def test_report_html_viewer_draws_in_a_headless_browser(placed, tmp_path):
+    d, out, report = placed
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             "--virtual-time-budget=20000"]
+    r = subprocess.run([CHROMIUM, *flags, f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+                        (out / "report.html").as_uri()], capture_output=True, encoding="utf-8", errors="replace",
+                       timeout=180)
+    assert r.returncode == 0, r.stderr[-2000:]
+    body = r.stdout[r.stdout.index("<body"):r.stdout.index(">", r.stdout.index("<body")) + 1]
+    assert 'data-viewer="ok"' in body and "data-errors" not in body, body
+    assert 'data-edge-pixels="0"' in body
+
+
+def test_glb_passes_the_khronos_validator(placed, tmp_path):
+    import os
+    node = shutil.which("node")
+    validator = Path(os.environ.get("PRS_GLTF_VALIDATOR", Path(__file__).resolve().parent.parent / ".ci" / "node"
+                                    / "node_modules" / "gltf-validator"))
+    if node is None or not (validator / "package.json").exists():
+        pytest.skip("node or gltf-validator not installed (npm install --prefix .ci/node gltf-validator)")
+    d, out, report = placed
+    script = tmp_path / "validate.js"
+    script.write_text(
+        "const v = require(process.argv[2]); const fs = require('fs');\n"
+        "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[3]))).then(r => {\n"
+        "  console.log(JSON.stringify(r.issues)); }).catch(e => { console.error(e); process.exit(3); });\n")
+    r = subprocess.run([node, str(script), str(validator), str(out / "assembly.glb")],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    issues = json.loads(r.stdout)
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"][:10]

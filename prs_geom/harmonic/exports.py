@@ -1,14 +1,23 @@
 """Exports of the harmonic friction drive: ratio plot, CSV table, DXF axial section at
 chosen positions, STL meshes of the cone-bored circular spline and the flexspline cup.
 
-Meshes are solids of revolution of the undeformed parts (each in its own frame, z along
-the axis, mm): the circular spline is a ring whose bore is the cone (radius b1 at z = 0 to
+Meshes are solids of revolution of the undeformed parts (defined in
+:mod:`prs_geom.harmonic.assembly` with the placed assembly, importable from here too; each in
+its own frame, z along the axis, mm): the circular spline is a ring whose bore is the cone (radius b1 at z = 0 to
 b2 at z = H); the flexspline is a cup (bottom at z = 0) of wall thickness t about the
 neutral radius with, at its open end, the contact bulge: the arc of radius r_s centred at
 radius r0 - c_s, height x_s = L - r_s, between the outer and the inner wall. Arcs are
 sampled with half the chordal tolerance as chord sagitta and the revolution with the
 other half; the revolution error is measured (:func:`revolve_deviation`) and reported with
 the arc-chord bound.
+
+:func:`harmonic_outputs` writes what the placed assembly adds (the pipeline's harmonic stage
+calls it last): the drive at one input position (:mod:`prs_geom.harmonic.assembly`) as per-part
+STLs of the new parts (``flexspline_placed.stl``: the deformed flexspline in the assembly
+frame; ``wave_generator.stl``: its own frame), ``assembly.glb`` (glTF 2.0, metres, +Y up, one
+named node per part) and ``assembly.3mf`` (millimetres, one object and build item per part),
+both through :mod:`prs_geom.exports.scene`, and ``report.html``
+(:mod:`prs_geom.harmonic.report`).
 """
 from __future__ import annotations
 
@@ -24,43 +33,11 @@ import trimesh
 from ezdxf import units
 
 from prs_geom.exports.dxf import save_dxf
+from prs_geom.exports.scene import Material, Scene, SceneMesh, SceneNode
+# the parts' undeformed geometry lives with the assembly; these names stay importable from here
+from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
+                                        flexspline_mesh, flexspline_profile, revolution_sections)
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
-
-
-def _sections(radius: float, tol: float) -> int:
-    return max(24, int(math.ceil(math.pi / math.acos(1.0 - tol / radius))))
-
-
-def circular_spline_mesh(d: HarmonicDesign) -> trimesh.Trimesh:
-    prof = circular_spline_profile(d)
-    closed = np.concatenate([prof, prof[:1]])
-    return trimesh.creation.revolve(closed, sections=_sections(d.circular_spline.outer_radius_mm,
-                                                              d.mesh.chord_tolerance_mm))
-
-
-def flexspline_profile(d: HarmonicDesign) -> np.ndarray:
-    """Closed (r, z) polygon of the cup's half section, counter-clockwise."""
-    f = d.flexspline
-    tol = d.mesh.chord_tolerance_mm
-    r0, t, rs, cs = f.neutral_radius_mm, f.wall_thickness_mm, f.arc_radius_mm, f.arc_centre_offset_mm
-    ro, ri = r0 + 0.5 * t, r0 - 0.5 * t
-    cr, cz = r0 - cs, d.x_s
-    if cr + rs <= ro:
-        raise ValueError("the contact arc does not bulge beyond the outer wall")
-    # arc from the outer wall (lower junction) over the bulge to the inner wall (upper junction)
-    th0 = -math.acos((ro - cr) / rs)              # below the centre, on the outer wall
-    th1 = math.acos((ri - cr) / rs) if abs(ri - cr) < rs else math.pi / 2
-    dth = 2 * math.acos(1 - 0.5 * tol / rs)   # half the tolerance for the arc chords
-    th = np.linspace(th0, th1, max(8, int(math.ceil((th1 - th0) / dth)) + 1))
-    arc = np.column_stack([cr + rs * np.cos(th), cz + rs * np.sin(th)])
-    pts = [[0.0, 0.0], [ro, 0.0], *arc.tolist(), [ri, t], [0.0, t]]
-    return np.array(pts)
-
-
-def circular_spline_profile(d: HarmonicDesign) -> np.ndarray:
-    c = d.circular_spline
-    return np.array([[c.bore_small_radius_mm, 0.0], [c.outer_radius_mm, 0.0],
-                     [c.outer_radius_mm, c.bore_length_mm], [c.bore_large_radius_mm, c.bore_length_mm]])
 
 
 def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
@@ -75,12 +52,6 @@ def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
     t = np.clip(np.einsum("nsd,sd->ns", q[:, None, :] - a[None], ab) / np.einsum("sd,sd->s", ab, ab), 0, 1)
     foot = a[None] + t[..., None] * ab[None]
     return float(np.linalg.norm(q[:, None, :] - foot, axis=2).min(axis=1).max())
-
-
-def flexspline_mesh(d: HarmonicDesign) -> trimesh.Trimesh:
-    prof = flexspline_profile(d)
-    # trimesh.revolve wants a line that is closed or touches the axis; our polygon touches it
-    return trimesh.creation.revolve(prof, sections=_sections(float(prof[:, 0].max()), 0.5 * d.mesh.chord_tolerance_mm))
 
 
 def ratio_table_csv(table: list[dict[str, Any]]) -> str:
@@ -146,3 +117,98 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
     msp.add_text(f"{d.name}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; units mm",
                  height=2.0, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, -10.0))
     save_dxf(doc, path)
+
+
+# --------------------------------------------------------------------------- placed assembly
+#: Part materials of the placed assembly (linear RGB, PBR): ring steel, a blued spring-steel
+#: flexspline, a bronze-coloured wave generator; the viewer uses their sRGB colours.
+ASSEMBLY_MATERIALS: dict[str, Material] = {
+    "circular_spline": Material("circular spline steel", (0.40, 0.43, 0.48, 1.0), 0.85, 0.35),
+    "flexspline": Material("flexspline spring steel", (0.16, 0.30, 0.55, 1.0), 0.80, 0.30),
+    "wave_generator": Material("wave generator bronze", (0.62, 0.36, 0.12, 1.0), 0.75, 0.40),
+}
+
+
+def assembly_scene(asm: Any) -> Scene:
+    """The :class:`~prs_geom.exports.scene.Scene` of a placed
+    :class:`~prs_geom.harmonic.assembly.HarmonicAssembly`: one mesh, one material and one
+    top-level node per part (named as the part), placed by its rigid transform (mm)."""
+    meshes, nodes = {}, []
+    for name, (mesh, T) in asm.parts.items():
+        meshes[name] = SceneMesh(name, np.asarray(mesh.vertices, dtype=np.float64),
+                                 np.asarray(mesh.faces, dtype=np.int64), name)
+        nodes.append(SceneNode(name, name, np.asarray(T, dtype=np.float64)))
+    return Scene(meshes, {k: ASSEMBLY_MATERIALS[k] for k in meshes}, tuple(nodes),
+                 f"{asm.design.name} at a = {asm.position_mm:g} mm")
+
+
+def display_colours() -> dict[str, str]:
+    """Part -> ``#rrggbb`` (sRGB) of :data:`ASSEMBLY_MATERIALS`, for the report's viewer."""
+    return {k: m.srgb_hex[:7].lower() for k, m in ASSEMBLY_MATERIALS.items()}
+
+
+def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, Any], date: str, version: str,
+                     *, position_mm: float | None = None) -> list[str]:
+    """Place the drive, check it, and write its files; returns the file names written.
+
+    Parameters
+    ----------
+    design : HarmonicDesign
+    out_dir : Path
+        Output folder (exists). ``ratio.svg`` is read from it when the harmonic stage wrote
+        it (else the plot is rendered again, to a temporary folder).
+    report : dict
+        The build report holding ``harmonic`` and ``checks.meshes``; this adds
+        ``assembly`` (placement, wave generator, mesh checks of the new parts),
+        ``checks.assembly`` (contact gap, clearances, interference) and, when a check fails
+        its tolerance, lines to ``warnings``.
+    date, version : str
+        Build date (ISO) and prs_geom version, for report.html's provenance.
+    position_mm : float, optional
+        Position a (mm); default the middle of the control range
+        (:func:`prs_geom.harmonic.assembly.default_position`).
+
+    Returns
+    -------
+    list of str
+        ``flexspline_placed.stl``, ``wave_generator.stl``, ``assembly.glb``,
+        ``assembly.3mf``, ``report.html`` (relative to ``out_dir``).
+    """
+    import tempfile
+
+    from prs_geom.exports.meshes import stl_header, write_stl
+    from prs_geom.exports.scene import write_3mf, write_glb
+    from prs_geom.harmonic.assembly import assembly_checks, assembly_summary, build_assembly
+    from prs_geom.harmonic.report import DISPLAY_TOLERANCE_MM, write_report_html
+    from prs_geom.model.io import design_hash
+
+    out = Path(out_dir)
+    asm = build_assembly(design, position_mm)
+    report["assembly"] = summary = assembly_summary(asm)
+    report.setdefault("checks", {})["assembly"] = checks = assembly_checks(asm)
+    warnings = report.setdefault("warnings", [])
+    for row in summary["meshes"]:
+        warnings += [f"mesh check ({row['part']}, placed): {w}" for w in row["warnings"]]
+    warnings += [f"assembly check: {w}" for w in checks["warnings"]]
+    h = design_hash(design)
+    files = []
+    for name, file, frame in (("flexspline", "flexspline_placed.stl", "assembly frame"),
+                              ("wave_generator", "wave_generator.stl", "part frame")):
+        label = "flexspline placed" if name == "flexspline" else "wave generator"
+        write_stl(asm.parts[name][0], out / file, stl_header(label, h, frame))
+        files.append(file)
+    scene = assembly_scene(asm)
+    write_glb(scene, out / "assembly.glb")
+    write_3mf(scene, out / "assembly.3mf")
+    files += ["assembly.glb", "assembly.3mf"]
+    svg = out / "ratio.svg"
+    if svg.is_file():
+        svg_text = svg.read_text(encoding="utf-8")
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            plot_ratio(design, Path(tmp))
+            svg_text = (Path(tmp) / "ratio.svg").read_text(encoding="utf-8")
+    view = build_assembly(design, asm.position_mm, max(DISPLAY_TOLERANCE_MM, asm.tolerance_mm))
+    write_report_html(out / "report.html", design, report, view, display_colours(), svg_text, date, version)
+    files.append("report.html")
+    return files
