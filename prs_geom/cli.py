@@ -120,7 +120,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     progress = silent if args.quiet else StderrProgress()
     from prs_geom.pipeline import BuildOptions
 
-    options = BuildOptions(nominal_screw="nominal" in (args.screw or []))
+    options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step)
     report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
     for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
@@ -590,6 +590,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--screw", action="append", choices=["theoretical", "nominal"], metavar="KIND",
                    help="screw meshes to export: screw.stl is always the theoretical screw (the state "
                         "the analysis certifies); 'nominal' also writes screw_nominal.stl")
+    p.add_argument("--step", action="store_true",
+                   help="also write parts.step: the screw, roller and nut as B-rep solids (STEP AP214; needs "
+                        "pip install \"prs-geom[step]\"; several seconds)")
     budget_arg(p)
     p.set_defaults(func=cmd_build)
 

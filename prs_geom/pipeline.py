@@ -38,6 +38,7 @@ from prs_geom.progress import ProgressFn, silent
 if TYPE_CHECKING:  # pragma: no cover
     import trimesh
 
+    from prs_geom.analysis.gears import GearAnalysis
     from prs_geom.analysis.machining import MachiningSheet
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
@@ -111,9 +112,14 @@ class BuildOptions:
     nominal_screw : bool
         Also export the nominal screw (``screw_nominal.stl``; ``--screw nominal``). The
         exported ``screw.stl`` is always the theoretical screw the analysis certifies.
+    step : bool
+        Also write ``parts.step``: screw (theoretical), roller and nut as B-rep solids
+        (``--step``; needs the optional extra ``prs-geom[step]``; docs/step.md).
     """
 
     nominal_screw: bool = False
+    #: also write parts.step (B-rep solids; optional extra [step], several seconds)
+    step: bool = False
 
 
 @dataclass
@@ -127,6 +133,7 @@ class BuildContext:
     progress: ProgressFn = silent
     options: BuildOptions = field(default_factory=BuildOptions)
     contact: ContactResult | None = None
+    gears: "GearAnalysis | None" = None
     loads: LoadsResult | None = None
     tolerance: "ToleranceStudy | None" = None
     meshes: MeshStage | None = None
@@ -171,6 +178,21 @@ def stage_contact(ctx: BuildContext) -> None:
     ctx.report["contact"] = ctx.contact.report()
 
 
+def stage_gears(ctx: BuildContext) -> None:
+    """The synchronising end gears: sizing, checks, phasing, running clearance (``gears``)."""
+    from prs_geom.analysis.gears import analyse_gears
+
+    ctx.gears = analyse_gears(ctx.design)
+    if ctx.gears is not None:
+        ctx.report["gears"] = rep = ctx.gears.report()
+        if not rep["passed"]:
+            failed = [c["name"] for c in rep["checks"] if not c["passed"]]
+            ctx.report["warnings"].append(
+                "end gears: " + ", ".join(failed + ([] if rep["phasing"]["consistent"] else ["phasing"])
+                                          + (["running clearance"] if rep["running_clearance"]["overlap"] else []))
+                + " failed (report gears)")
+
+
 def stage_loads(ctx: BuildContext) -> None:
     """Load distribution, equal-load pitch design, off-design and plots."""
     from prs_geom.exports.plots import plot_loads
@@ -209,7 +231,7 @@ def stage_meshes(ctx: BuildContext) -> None:
     """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
     from prs_geom.exports.meshes import export_meshes
     from prs_geom.geometry.frames import thread_length
-    from prs_geom.mesh.assembly import SIMPLIFIED_PARTS, build_assembly, build_part
+    from prs_geom.mesh.assembly import build_assembly, build_part
     from prs_geom.mesh.thread import analytic_thread_volume, mesh_report
 
     d = ctx.design
@@ -229,12 +251,21 @@ def stage_meshes(ctx: BuildContext) -> None:
         "parts": list(asm.placed),
         "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
         "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
-        "simplified": SIMPLIFIED_PARTS,
         "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
     }
     nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.report["files"].append(name)
+    if ctx.options.step:
+        from prs_geom.exports.step import write_step
+
+        ctx.report["step"] = section = write_step(d, ctx.out / "parts.step", screw_profile=ctx.contact.screw_profile)
+        if section["file"]:
+            ctx.report["files"].append(section["file"])
+        for part, row in section["parts"].items():
+            if not row["valid"]:
+                ctx.report["warnings"].append(f"STEP: the {part} could not be made a valid solid and was left "
+                                              f"out of parts.step: {row['reason']}")
 
 
 def stage_checks(ctx: BuildContext) -> None:
@@ -305,6 +336,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("design", stage_design),
     ("pitch", stage_pitch),
     ("contact", stage_contact),
+    ("gears", stage_gears),
     ("loads", stage_loads),
     ("tolerance", stage_tolerance),
     ("meshes", stage_meshes),

@@ -80,13 +80,13 @@ def tooth_mids(mesh, x, y):
     return 0.5 * (z[start] + z[start + 1])
 
 
-def test_scene_names_and_simplified_parts():
+def test_scene_names_and_gear_parts():
     d = PRSDesign(roller=Roller(count=4))
     asm = build_assembly(d, tol=0.02)
     names = set(asm.placed)
     assert {"screw", "nut", "roller_0", "roller_3", "roller_3_gear_lo", "nut_ring_gear_hi"} <= names
     kinds = {n: kind for n, (_, _, kind) in asm.placed.items()}
-    assert kinds["roller_0_gear_lo"] == "simplified" and kinds["roller_0"] == "thread"
+    assert kinds["roller_0_gear_lo"] == "gear" and kinds["roller_0"] == "thread"
     for n, (mesh, _, _) in asm.placed.items():
         assert mesh.is_watertight, n
     assert asm.rigid_body("roller_2_gear_hi") == "roller_2"
@@ -98,3 +98,41 @@ def test_scene_names_and_simplified_parts():
     assert V.shape[1] == 3 and np.isfinite(V).all()
     start = int(np.argmin(np.linalg.norm(V - m3.vertices[0], axis=1)))
     np.testing.assert_allclose(V[start:start + len(m3.vertices)], m3.vertices, atol=1e-12, rtol=0)
+
+
+def test_end_gears_mesh_with_the_ring_gear_by_the_backlash_and_carry_the_thread():
+    """Every placed roller gear stands off the ring gear by half the normal backlash (FCL
+    distance of the meshes, at both ends): the phasing is right for every roller. The
+    roller gear's tips carry the thread (largest radius = the thread's major radius) and
+    its flanks lie inside the involute outline."""
+    import fcl
+
+    from prs_geom.analysis.gears import analyse_gears
+    from prs_geom.checks.fcl import bvh_model
+
+    d = PRSDesign()
+    g = analyse_gears(d)
+    asm = build_assembly(d, tol=0.01)
+    jn = g.checks.backlash_normal_mm
+    objs = {}
+    for name, (mesh, T, kind) in asm.placed.items():
+        if kind == "gear":
+            objs[name] = fcl.CollisionObject(bvh_model(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+                                             fcl.Transform(T[:3, :3], T[:3, 3]))
+    for end in ("lo", "hi"):
+        ring = objs[f"nut_ring_gear_{end}"]
+        for k in range(d.roller.count):
+            res = fcl.DistanceResult()
+            dist = fcl.distance(objs[f"roller_{k}_gear_{end}"], ring, fcl.DistanceRequest(), res)
+            # 1 um gear outlines: the distance is j_n / 2 within the two chord errors
+            assert dist == pytest.approx(0.5 * jn, abs=2.5e-3), (end, k, dist)
+    mesh = asm.placed["roller_0_gear_lo"][0]
+    r = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    # gear tip (capped at the thread major diameter) and thread crest, both within the chord
+    assert 0.5 * d.roller.major_diameter_mm - 0.01 <= r.max() <= 0.5 * d.roller.major_diameter_mm + 1e-9
+    off_axis = r > 1e-9                                  # the end caps' fan centres lie on the axis
+    assert r[off_axis].min() >= g.roller_gear.root_radius_mm - 1e-9
+    # same mesh on every roller (identical parts), one face width long
+    assert asm.placed["roller_7_gear_lo"][0] is mesh
+    z = mesh.vertices[:, 2]
+    assert z.min() == pytest.approx(-g.face_width_mm) and z.max() == pytest.approx(0.0, abs=1e-12)

@@ -36,9 +36,10 @@ def test_glb_scene_has_named_parts(built):
     assert isinstance(scene, trimesh.Scene)
     names = set(scene.graph.nodes_geometry)
     assert set(report["assembly"]["parts"]) == names
-    # roller 3 placed at its carrier angle: its bounding box centre at the centre distance
+    # roller 3 placed at its carrier angle: its axis at the centre distance (metres, +Y up:
+    # the screw axis is glTF's y, so the radial plane is x-z)
     T, geom = scene.graph["roller_3"]
-    assert np.hypot(T[0, 3], T[1, 3]) == pytest.approx(d.centre_distance_mm, abs=1e-5)
+    assert np.hypot(T[0, 3], T[2, 3]) == pytest.approx(d.centre_distance_mm * 1e-3, abs=1e-8)
 
 
 def test_report_mesh_section(built):
@@ -51,7 +52,8 @@ def test_report_mesh_section(built):
         assert row["watertight"] and row["manifold"]
         assert row["chord_tolerance_mm"] == 0.02
         assert 0 < row["max_deviation_mm"] <= 0.02
-    assert "roller_gear" in report["assembly"]["simplified"]
+    assert report["gears"]["passed"] and report["gears"]["roller_gear"]["teeth"] * report["gears"]["roller_gear"][
+        "module_mm"] == pytest.approx(8.0)
     assert report["assembly"]["roller_carrier_angles_deg"] == pytest.approx([0, 72, 144, 216, 288])
     assert set(report["files"]) >= {"screw.stl", "roller.stl", "nut.stl", "assembly.stl", "assembly.glb",
                                     "report.json", "design.toml"}

@@ -25,10 +25,13 @@ def test_check_default_design_nominal_screw_interferes_at_screw_roller_pairs():
     assert code == 1
     assert rep["found"] is True
     pairs = {tuple(r["pair"]) for r in rep["pairs"]}
-    assert pairs == {("screw", f"roller_{k}") for k in range(10)}
+    # the roller threads and the roller gears (their teeth carry the thread) hit the screw
+    assert pairs == {("screw", f"roller_{k}{g}") for k in range(10) for g in ("", "_gear_lo", "_gear_hi")}
     for r in rep["pairs"]:
-        assert r["volume_mm3"] > 0.1
-        assert r["teeth"] == list(range(1, 21))
+        thread = "gear" not in r["pair"][1]
+        assert r["volume_mm3"] > (0.1 if thread else 0.005)
+        if thread:
+            assert r["teeth"] == list(range(1, 21))
         # the overlap is as thick as the analytic interference (0.047 mm along the normal)
         assert 0.015 < r["mean_thickness_mm"] < 0.047
 

@@ -69,7 +69,9 @@ TITLE_H = 5.0                            # ISO 3098 title text height on paper (
 SCALES = (2.0, 1.0, 0.5)                 # section scales tried, largest first
 DETAIL_SCALE = 10.0
 #: paper rectangles (x0, y0, x1, y1) of the section and detail viewports and the title block
-MAIN_VP = (25.0, 105.0, 405.0, 275.0)
+MAIN_VP = (25.0, 140.0, 405.0, 275.0)
+#: Notes block on the sheet: left x, top y, wrap width in characters (3.5 mm text).
+NOTES = (230.0, 133.0, 82)
 DETAIL_VP = (25.0, 15.0, 225.0, 92.0)
 TITLE_BLOCK = (230.0, 10.0, 410.0, 75.0)
 ELLIPSE_CHORDS = 24
@@ -298,8 +300,9 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     hb = min(h, 0.8 * (mark.r_outer - mark.r_inner))
     msp.add_lwpolyline([(x_floor, y_mid - 0.5 * hb), (x_floor, y_mid + 0.5 * hb), (x_floor - 0.866 * hb, y_mid)],
                        close=True, dxfattribs={"layer": "TEXT"})
-    msp.add_line((x_floor - 0.866 * hb, y_mid), (face - 8.0 * k, y_mid), dxfattribs={"layer": "TEXT"})
-    datum_box("B", face - 8.0 * k, y_mid)
+    # B's box sits one box further out than A's so the two never overlap
+    msp.add_line((x_floor - 0.866 * hb, y_mid), (face - 10.0 * k - b, y_mid), dxfattribs={"layer": "TEXT"})
+    datum_box("B", face - 10.0 * k - b, y_mid)
     msp.add_linear_dim(base=(face, mark.r_outer + 4.0 * k), p1=(face, mark.r_outer), p2=(x_floor, mark.r_outer),
                        text="<> (slot B depth)", override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
     # -- DETAIL A: normal section of one tooth, in its own region of model space
@@ -368,8 +371,24 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
         notes.append(f"Pitch dia. is the theoretical {2 * rp:.6f} mm (nominal {design.screw.pitch_diameter_mm:g})")
     if part in ("roller", "nut") and getattr(design, part).pitch_list_mm is not None:
         notes.append("Graded pitch: see machining sheet for the pitch list")
-    for i, n in enumerate(notes):
-        t(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((TITLE_BLOCK[0] + 2.0, vy0 - 10.0 - 5.0 * i))
+    if part in ("roller", "nut"):
+        from prs_geom.geometry.gears import design_gear_pair
+
+        pair = design_gear_pair(design)
+        if pair is not None:
+            g = pair.pinion if part == "roller" else pair.ring
+            k = g.recommended_span_teeth()
+            pin = g.ideal_pin_diameter()
+            where = "each roller end, beyond the thread" if part == "roller" else "each nut end (internal)"
+            notes.append(f"Spur gear at {where}: z {g.teeth}, m {g.module_mm:g}, alpha {g.pressure_angle_deg:g} deg, "
+                         f"x {g.profile_shift + 0.0:+.2f}, width {g.face_width_mm:g}")
+            notes.append(f"  W{k} = {g.span_measurement(k):.4f} mm over {k} teeth; "
+                         f"{'between' if g.internal else 'over'} pins d {pin:.4f}: {g.over_pins(pin):.4f} mm")
+    import textwrap
+
+    lines = [w for n in notes for w in textwrap.wrap(n, NOTES[2], subsequent_indent="  ")]
+    for i, n in enumerate(lines):
+        t(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((NOTES[0], NOTES[1] - 5.0 * i))
     mat = getattr(design.materials, part)
     rows = [("Design", design.name), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
             ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{_scale_text(s)} (detail 10:1)"), ("Units", "mm"),

@@ -36,7 +36,7 @@ from prs_geom.model.io import design_hash, design_to_dict
 #: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
 DISPLAY_TOLERANCE_MM = 0.1
 
-COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "simplified": "#b0b0b0"}
+COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "gear": "#9a9aa4"}
 
 
 def _b64(a: np.ndarray) -> str:
@@ -53,7 +53,7 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM, screw_pr
             index[id(mesh)] = len(meshes)
             meshes.append({"v": _b64(np.asarray(mesh.vertices, dtype=np.float32)),
                            "f": _b64(np.asarray(mesh.faces, dtype=np.uint32))})
-        colour = COLOURS["simplified"] if kind == "simplified" else COLOURS[name.split("_")[0]]
+        colour = COLOURS["gear"] if kind == "gear" else COLOURS[name.split("_")[0]]
         instances.append({"name": name, "mesh": index[id(mesh)], "T": [float(x) for x in T.ravel()],
                           "colour": colour, "cut": name.startswith("nut")})
     tri = sum(len(asm.placed[i["name"]][0].faces) for i in instances)

@@ -1366,3 +1366,31 @@ def sweep_clearance(pair: GearPair, carrier_angles_rad: ArrayLike, roller_spins_
             r = min_clearance_2d(P, T, Rg, I3, b_material_inside=False)
             cl[k, s], ov[k, s] = r.distance_mm, r.overlap
     return SweepClearance(_frozen(adv), _frozen(cl), _frozen(ov))
+
+
+# --------------------------------------------------------------------------- from a design
+def design_gear_pair(design) -> GearPair | None:
+    """The roller/ring gear pair of a :class:`~prs_geom.model.design.PRSDesign` (None when
+    ``design.gears.enabled`` is false).
+
+    :func:`default_gear_pair` with the design's pressure angle, backlash and face width
+    (default two thread pitches); the module series is the design's ``gears.module_mm``
+    alone when given, else ISO 54. The roller gear's tip is capped at the roller's thread
+    major diameter: the teeth are cut through the threaded roller ends, so nothing of the
+    gear stands above the thread. n_n = d_n / d_r.
+    """
+    g = design.gears
+    if not g.enabled:
+        return None
+    width = g.face_width_mm if g.face_width_mm is not None else 2.0 * design.thread.pitch_mm
+    modules = (g.module_mm,) if g.module_mm is not None else ISO54_MODULES_MM
+    try:
+        return default_gear_pair(design.roller.pitch_diameter_mm,
+                                 design.nut.pitch_diameter_mm / design.roller.pitch_diameter_mm,
+                                 pressure_angle_deg=g.pressure_angle_deg, backlash_mm=g.backlash_mm,
+                                 face_width_mm=width, max_pinion_tip_diameter_mm=design.roller.major_diameter_mm,
+                                 modules=modules)
+    except DesignError as exc:
+        field = "gears.module_mm" if g.module_mm is not None else "roller.pitch_diameter_mm"
+        raise DesignError(field, g.module_mm if g.module_mm is not None else design.roller.pitch_diameter_mm,
+                          f"no valid roller/ring gear pair: {exc.rule}") from exc

@@ -3,34 +3,26 @@
 Frames and roller phasing are those of :mod:`prs_geom.geometry.frames`; this module meshes
 each part once in its own frame and places the rollers as transforms of one roller mesh.
 
-Simplified parts (named as such in the report): the roller end spur teeth are cylinders
-of the roller root diameter, the nut ring gears are rings whose bore is the nut crest
-diameter, each ``GEAR_LENGTH_PITCHES`` pitches long beyond the thread ends.
+End gears (:func:`end_gears`, docs/theory/gears.md): a spur gear on each roller end, one
+face width beyond the thread, cut through the continued thread; an internal ring gear at
+each nut end. They are placed as their own scene parts (``roller_<k>_gear_lo/hi``,
+``nut_ring_gear_lo/hi``) that move with their roller or nut (:meth:`Assembly.rigid_body`).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from prs_geom.geometry.frames import (FIRST_MID_PITCHES, part_warps, roller_transform, screw_z_range,
-                                     thread_length)
+from prs_geom.geometry.frames import (FIRST_MID_PITCHES, carrier_angles, part_warps, roller_spin,
+                                     roller_transform, screw_z_range, thread_length)
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.datum import datum_mark
 from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, thread_mesh
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
-
-GEAR_LENGTH_PITCHES = 2.0
-
-SIMPLIFIED_PARTS = {
-    "roller_gear": "roller end spur teeth simplified to plain cylinders of the roller root diameter",
-    "nut_ring_gear": "nut internal ring gears simplified to plain rings with the nut crest (bore) diameter",
-}
-
 
 def build_part(design: PRSDesign, part: str, tol: float | None = None,
                profiles: ThreadProfiles | None = None,
@@ -60,15 +52,57 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
     return cut_datum_mark(tm, datum_mark(tm.profile, tm.z_lo, tm.body_radius))
 
 
-def _cylinder(r_in: float, r_out: float, z0: float, z1: float, tol: float) -> trimesh.Trimesh:
-    """Closed cylinder (r_in = 0) or ring, polygon sagitta <= tol."""
-    sections = max(16, int(math.ceil(math.pi / math.acos(1.0 - tol / r_out))))
-    if r_in <= 0:
-        m = trimesh.creation.cylinder(radius=r_out, height=z1 - z0, sections=sections)
-    else:
-        m = trimesh.creation.annulus(r_min=r_in, r_max=r_out, height=z1 - z0, sections=sections)
-    m.apply_translation([0, 0, 0.5 * (z0 + z1)])
-    return m
+#: Gear outlines are never meshed coarser than this (mm).
+GEAR_CHORD_MM = 1e-3
+
+
+def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None) -> dict[str, trimesh.Trimesh] | None:
+    """Meshes of the roller end gears and the nut ring gears, in the roller and nut frames
+    (None when the design's gears are disabled).
+
+    Each roller gear spans one face width beyond its thread end (z in [-w, 0] and [L, L + w])
+    and is the roller thread continued there, intersected with the involute gear prism: the
+    teeth are cut through the threaded end, so the gear's tip carries the thread and meshes
+    with the screw like the thread does. Its tooth 0 sits at the phasing offset from the
+    roller's theta = 0 (:func:`prs_geom.geometry.gears.roller_gear_phasing`), the same on
+    every roller. The ring gears span the same z ranges in the nut frame, tooth 0 on +x, from
+    their root to the nut body diameter.
+    """
+    import manifold3d
+
+    from prs_geom.geometry.gears import design_gear_pair, roller_gear_phasing
+    from prs_geom.mesh.gears import gear_mesh
+
+    pair = design_gear_pair(design)
+    if pair is None:
+        return None
+    # the ring gear's fillet sampled coarser than ~1 um can step back in polar angle, which
+    # the prism's cap triangulation refuses; 1 um outlines cost a few thousand vertices
+    gear_tol = min(tol, GEAR_CHORD_MM)
+    prof = prof or ThreadProfiles.from_design(design)
+    psi = carrier_angles(design)
+    chi = np.array([roller_spin(design, a) for a in psi])
+    offset = roller_gear_phasing(pair.pinion, pair.ring, psi, chi).offset_rad
+    w = pair.pinion.face_width_mm
+    L = thread_length(design)
+    p = design.thread.pitch_mm
+    warp = part_warps(design)["roller"]
+    out: dict[str, trimesh.Trimesh] = {}
+    # the prism overshoots the thread's end planes, so only they bound the gear axially
+    Vg, Fg = gear_mesh(pair.pinion, -w - 1.0, L + w + 1.0, gear_tol, phase_rad=offset)
+    prism = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(Vg), np.ascontiguousarray(Fg, dtype=np.uint64)))
+    for name, (z0, z1) in (("roller_lo", (-w, 0.0)), ("roller_hi", (L, L + w))):
+        tm = thread_mesh(prof.roller, z0, z1, tol, FIRST_MID_PITCHES["roller"] * p, warp)
+        thread = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(tm.vertices),
+                                                       np.ascontiguousarray(tm.faces, dtype=np.uint64)))
+        m = (thread ^ prism).to_mesh64()
+        out[name] = trimesh.Trimesh(np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
+                                    np.array(m.tri_verts, dtype=np.int64), process=False, validate=False)
+    body = 0.5 * design.nut.outer_diameter_mm
+    for name, (z0, z1) in (("ring_lo", (-w, 0.0)), ("ring_hi", (L, L + w))):
+        V, F = gear_mesh(pair.ring, z0, z1, gear_tol, outer_radius_mm=body)
+        out[name] = trimesh.Trimesh(V, F, process=False, validate=False)
+    return out
 
 
 @dataclass
@@ -156,21 +190,17 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
     I = np.eye(4)
     asm.placed["screw"] = (parts["screw"].to_trimesh(), I, "thread")
     asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
-    L = thread_length(design)
-    gl = GEAR_LENGTH_PITCHES * design.thread.pitch_mm
-    if gears:
-        ring_in, ring_out = 0.5 * design.nut.minor_diameter_mm, 0.5 * design.nut.outer_diameter_mm
-        asm.placed["nut_ring_gear_lo"] = (_cylinder(ring_in, ring_out, -gl, 0.0, tol), I, "simplified")
-        asm.placed["nut_ring_gear_hi"] = (_cylinder(ring_in, ring_out, L, L + gl, tol), I, "simplified")
-        gear_lo = _cylinder(0.0, 0.5 * design.roller.minor_diameter_mm, -gl, 0.0, tol)
-        gear_hi = _cylinder(0.0, 0.5 * design.roller.minor_diameter_mm, L, L + gl, tol)
+    gear_parts = end_gears(design, tol, prof) if gears else None
+    if gear_parts is not None:
+        asm.placed["nut_ring_gear_lo"] = (gear_parts["ring_lo"], I, "gear")
+        asm.placed["nut_ring_gear_hi"] = (gear_parts["ring_hi"], I, "gear")
     roller_tm = parts["roller"].to_trimesh()
     z = design.roller.count
     for k in range(z):
         T = roller_transform(design, k)
         asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
-        if gears:
-            asm.placed[f"roller_{k}_gear_lo"] = (gear_lo, T, "simplified")
-            asm.placed[f"roller_{k}_gear_hi"] = (gear_hi, T, "simplified")
+        if gear_parts is not None:
+            asm.placed[f"roller_{k}_gear_lo"] = (gear_parts["roller_lo"], T, "gear")
+            asm.placed[f"roller_{k}_gear_hi"] = (gear_parts["roller_hi"], T, "gear")
         progress("placing rollers", k + 1, z)
     return asm

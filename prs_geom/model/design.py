@@ -402,6 +402,41 @@ class MeshSettings:
         _set(self, "chord_tolerance_mm", tol)
 
 
+@dataclass(frozen=True)
+class GearSettings:
+    """The synchronising spur gears: a gear on each roller end meshing with a ring gear at
+    each nut end (docs/theory/gears.md).
+
+    The gears' working pitch diameters are fixed by the thread (roller gear m z_g = d_r,
+    ring z_ring = (d_n / d_r) z_g), so the designer chooses the module (``module_mm``, or
+    none: the largest ISO 54 module that gives whole tooth numbers and passes every check),
+    the pressure angle, the total circumferential backlash (half as tooth thinning on each
+    gear) and the face width (none: two thread pitches). Profile shift and the ring
+    addendum follow from the rule of :func:`prs_geom.geometry.gears.default_gear_pair`.
+    ``enabled = false`` leaves the gears out of meshes, checks and report.
+    """
+
+    enabled: bool = True
+    module_mm: float | None = None
+    pressure_angle_deg: float = 20.0
+    backlash_mm: float = 0.04
+    face_width_mm: float | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.enabled, bool):
+            raise DesignError("enabled", self.enabled, "must be true or false")
+        _set(self, "module_mm", optional_size("module_mm", self.module_mm))
+        a = real("pressure_angle_deg", self.pressure_angle_deg)
+        if not 14.5 <= a <= 30.0:
+            raise DesignError("pressure_angle_deg", self.pressure_angle_deg, "must be from 14.5 to 30 deg")
+        _set(self, "pressure_angle_deg", a)
+        j = real("backlash_mm", self.backlash_mm)
+        if not 0.0 <= j <= 1.0:
+            raise DesignError("backlash_mm", self.backlash_mm, "must be from 0 to 1 mm")
+        _set(self, "backlash_mm", j)
+        _set(self, "face_width_mm", optional_size("face_width_mm", self.face_width_mm))
+
+
 # --------------------------------------------------------------------------- assembly
 @dataclass(frozen=True)
 class PRSDesign:
@@ -422,6 +457,7 @@ class PRSDesign:
     loads: LoadSettings = field(default_factory=LoadSettings)
     contact: ContactSettings = field(default_factory=ContactSettings)
     mesh: MeshSettings = field(default_factory=MeshSettings)
+    gears: GearSettings = field(default_factory=GearSettings)
     #: optional: present only when the designer states tolerances (io reads it as a table)
     tolerances: Tolerances | None = field(default=None, metadata={"section": Tolerances})
 
