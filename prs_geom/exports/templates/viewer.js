@@ -81,9 +81,11 @@ controls.target.copy(sphere.center);
 function fitDistance() {
   const half = THREE.MathUtils.degToRad(camera.fov / 2);
   const halfH = Math.atan(Math.tan(half) * Math.min(1, camera.aspect));
-  return 1.04 * sphere.radius / Math.sin(halfH);
+  return (data.view && data.view.fit ? data.view.fit : 1.04) * sphere.radius / Math.sin(halfH);
 }
-const viewDir = new THREE.Vector3(0.55, 0.45, 1.0).normalize();
+// optional view in the scene data (docs pictures): direction from the target, y up
+const viewDir = (data.view && data.view.direction ? new THREE.Vector3(...data.view.direction)
+                 : new THREE.Vector3(0.55, 0.45, 1.0)).normalize();
 camera.position.copy(sphere.center).addScaledVector(viewDir, fitDistance());
 controls.update();
 
