@@ -82,6 +82,12 @@ INVALID = {
     "mesh.chord_tolerance_mm": out_of(1e-4, 0.1),
     **{f"materials.{part}.thermal_expansion_per_k": out_of(0.0, 1e-3) for part in ("screw", "roller", "nut")},
     "loads.tooth_width": bad_choice(("circumference-share", "ring", "contact-ellipse", "unit")),
+    "gears.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
+    # besides <= 0: modules that cut the default roller (d_r = 8 mm) into no whole tooth number
+    "gears.module_mm": st.one_of(non_positive, st.sampled_from([0.3, 0.7, 3.0])),
+    "gears.pressure_angle_deg": out_of(14.5, 30.0),
+    "gears.backlash_mm": out_of(0.0, 1.0),
+    "gears.face_width_mm": non_positive,
     # the optional [tolerances] section
     "tolerances.distribution": bad_choice(("uniform", "normal")),
     **{f"tolerances.{k}": out_of(0.0, 100.0) for k in ("flank_um", "roller_diameter_um", "screw_eccentricity_um",
@@ -115,6 +121,7 @@ def test_every_design_field_has_an_invalid_case():
 
     walk(design_to_dict(default_design()), "")
     leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
+    leaves |= {"gears.module_mm", "gears.face_width_mm"}        # absent: by the sizing rule
     leaves |= {f"tolerances.{f.name}" for f in dataclasses.fields(Tolerances)}  # optional section
     assert leaves == set(INVALID)
 

@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run
+from readers import read_3mf, solid, stl_merged
 from prs_geom.model.io import dumps_toml, loads_toml, toml_string
 from prs_geom.model.errors import DesignError
 from prs_geom.harmonic.model import (CircularSpline, Flexspline, HarmonicDesign, Positions, contact_point,
@@ -201,7 +202,6 @@ import re
 import shutil
 import subprocess
 
-import manifold3d
 
 from prs_geom._version import __version__
 from prs_geom.harmonic.assembly import (assembly_checks, build_assembly, default_position, deform,
@@ -224,48 +224,6 @@ def placed(tmp_path_factory):
     if "report.html" not in report["files"]:
         report["files"] += harmonic_outputs(d, out, report, "2024-01-02", __version__)
     return d, out, report
-
-
-def _stl(path: Path) -> trimesh.Trimesh:
-    m = trimesh.load(path, file_type="stl", process=False)
-    m.merge_vertices(merge_tex=True, merge_norm=True)
-    return m
-
-
-def _solid(V, F):
-    m = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(V, dtype=np.float64),
-                                              np.ascontiguousarray(F, dtype=np.uint64)))
-    assert m.status() == manifold3d.Error.NoError and m.volume() > 0
-    return m
-
-
-def _read_3mf(path: Path) -> dict:
-    """Objects (vertices, faces) and build items (4x4 transform, object name) by lib3mf."""
-    import lib3mf
-
-    w = lib3mf.get_wrapper()
-    model = w.CreateModel()
-    model.QueryReader("3mf").ReadFromFile(str(path))
-    objects = {}
-    it = model.GetMeshObjects()
-    while it.MoveNext():
-        o = it.GetCurrentMeshObject()
-        V = np.array([list(p.Coordinates) for p in o.GetVertices()], dtype=np.float64)
-        F = np.array([list(t.Indices) for t in o.GetTriangleIndices()], dtype=np.int64)
-        objects[o.GetName()] = (V, F)
-    items, item_object = {}, {}
-    bi = model.GetBuildItems()
-    while bi.MoveNext():
-        b = bi.GetCurrent()
-        f = b.GetObjectTransform().Fields
-        T = np.eye(4)
-        for col in range(4):
-            for row in range(3):
-                T[row, col] = f[col][row]
-        items[b.GetPartNumber()] = T
-        item_object[b.GetPartNumber()] = b.GetObjectResource().GetName()
-    return {"unit": model.GetUnit(), "mm": lib3mf.ModelUnit.MilliMeter, "objects": objects, "items": items,
-            "item_object": item_object}
 
 
 def test_deformation_reproduces_the_model_section_on_the_major_axis():
@@ -355,7 +313,7 @@ def test_placed_flexspline_touches_the_cone_at_the_model_contact_point(placed):
     tol = d.mesh.chord_tolerance_mm
     a = report["assembly"]["position_mm"]
     x_c, r_c = contact_point(d, a)
-    m = _stl(out / "flexspline_placed.stl")
+    m = stl_merged(out / "flexspline_placed.stl")
     V = np.asarray(m.vertices, dtype=np.float64)
     c = d.circular_spline
     for sign in (1.0, -1.0):
@@ -378,7 +336,7 @@ def test_placed_flexspline_touches_the_cone_at_the_model_contact_point(placed):
 def test_assembly_read_back_from_3mf_has_no_interference_and_matches_the_stls(placed):
     d, out, report = placed
     tol = d.mesh.chord_tolerance_mm
-    m = _read_3mf(out / "assembly.3mf")
+    m = read_3mf(out / "assembly.3mf")
     assert m["unit"] == m["mm"]
     assert set(m["objects"]) == set(m["items"]) == {"circular_spline", "flexspline", "wave_generator"}
     assert m["item_object"] == {k: k for k in m["items"]}
@@ -388,7 +346,7 @@ def test_assembly_read_back_from_3mf_has_no_interference_and_matches_the_stls(pl
     for name, stl in (("circular_spline", "circular_spline.stl"), ("flexspline", "flexspline_placed.stl"),
                       ("wave_generator", "wave_generator.stl")):
         V, F = m["objects"][name]
-        ref = _stl(out / stl)
+        ref = stl_merged(out / stl)
         # both hold float32-sized coordinates, but lib3mf's decimal text does not round-trip
         # float32 exactly (53.0 is written 52.999999488): one float32 step at 32..64 mm
         # (3.8e-6 mm) over the surface bounds the volume difference
@@ -397,7 +355,7 @@ def test_assembly_read_back_from_3mf_has_no_interference_and_matches_the_stls(pl
     solids = {}
     for name, (V, F) in m["objects"].items():
         T = m["items"][name]
-        solids[name] = _solid(V @ T[:3, :3].T + T[:3, 3], F)
+        solids[name] = solid(V @ T[:3, :3].T + T[:3, 3], F)
     for p, q in (("circular_spline", "flexspline"), ("flexspline", "wave_generator"),
                  ("circular_spline", "wave_generator")):
         inter = solids[p] ^ solids[q]
@@ -406,12 +364,12 @@ def test_assembly_read_back_from_3mf_has_no_interference_and_matches_the_stls(pl
         assert thick <= 2 * tol, (p, q, vol, thick)
     # the check sees interference: the ring moved 2 mm further (narrower bore at the contact)
     V, F = m["objects"]["circular_spline"]
-    moved = _solid(V + [0, 0, a + 2.0], F) ^ solids["flexspline"]
+    moved = solid(V + [0, 0, a + 2.0], F) ^ solids["flexspline"]
     assert 2 * moved.volume() / moved.surface_area() > 2 * tol
     # the deformed flexspline keeps the undeformed volume to second order in the tilt
     beta = math.radians(report["assembly"]["beta_deg"])
     undeformed = next(r for r in report["checks"]["meshes"] if r["part"] == "flexspline")["volume_mm3"]
-    assert abs(_stl(out / "flexspline_placed.stl").volume / undeformed - 1) < beta ** 2
+    assert abs(stl_merged(out / "flexspline_placed.stl").volume / undeformed - 1) < beta ** 2
 
 
 def test_glb_has_three_named_parts_in_metres_y_up(placed):

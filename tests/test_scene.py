@@ -4,18 +4,17 @@ One default build (with ``--screw nominal``) is read back with trimesh (STL, GLB
 Khronos glTF validator (npm ``gltf-validator``, where node is present) and lib3mf (3MF).
 """
 import json
-import math
 import os
 import shutil
 import struct
 import subprocess
 from pathlib import Path
 
-import manifold3d
 import numpy as np
 import pytest
 import trimesh
 
+from readers import read_3mf, solid, stl_merged
 from prs_geom.exports.meshes import stl_bytes
 from prs_geom.exports.scene import split_normals
 from prs_geom.geometry.frames import roller_transform
@@ -38,20 +37,6 @@ def built(tmp_path_factory):
     return d, out, report
 
 
-def _stl(path: Path) -> trimesh.Trimesh:
-    """An STL read back by trimesh, its vertices merged (STL stores a triangle soup)."""
-    m = trimesh.load(path, file_type="stl", process=False)
-    m.merge_vertices(merge_tex=True, merge_norm=True)
-    return m
-
-
-def _manifold(V, F):
-    m = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(V, dtype=np.float64),
-                                              np.ascontiguousarray(F, dtype=np.uint64)))
-    assert m.status() == manifold3d.Error.NoError and m.volume() > 0   # a solid, not an empty set
-    return m
-
-
 # --------------------------------------------------------------------------- STL
 def test_exported_screw_is_the_theoretical_one(built):
     """screw.stl: its largest radius is the major radius, and its axial section at the
@@ -60,7 +45,7 @@ def test_exported_screw_is_the_theoretical_one(built):
     d, out, report = built
     r_th = 0.5 * report["contact"]["screw_roller"]["theoretical_pitch_diameter_mm"]
     for name, r_pitch in (("screw.stl", r_th), ("screw_nominal.stl", 0.5 * d.screw.pitch_diameter_mm)):
-        m = _stl(out / name)
+        m = stl_merged(out / name)
         r = np.hypot(m.vertices[:, 0], m.vertices[:, 1])
         assert r.max() == pytest.approx(0.5 * d.screw.major_diameter_mm, abs=1e-5)   # float32 in STL
         # the line (r_pitch, 0, z) pierces the flanks of the section at theta = 0
@@ -70,8 +55,8 @@ def test_exported_screw_is_the_theoretical_one(built):
         # 5-start screw, pitch p: the section shows every pitch p/2 + p/2 (the chord error of
         # the 0.01 mm mesh moves a crossing by at most tol / tan(beta) = 0.01 mm)
         np.testing.assert_allclose(widths, 0.5 * d.thread.pitch_mm, atol=0.012)
-    th = _stl(out / "screw.stl")
-    nom = _stl(out / "screw_nominal.stl")
+    th = stl_merged(out / "screw.stl")
+    nom = stl_merged(out / "screw_nominal.stl")
     # the theoretical screw is thinner at the same radius: less volume
     assert th.volume < nom.volume - 1.0
 
@@ -99,11 +84,11 @@ def test_exported_parts_do_not_interfere_and_the_nominal_screw_does(built):
     chord tolerance. With screw_nominal.stl every roller overlaps the screw by far more."""
     d, out, report = built
     tol = d.mesh.chord_tolerance_mm
-    screw, nut, roller = (_stl(out / f"{n}.stl") for n in ("screw", "nut", "roller"))
-    nominal = _stl(out / "screw_nominal.stl")
-    items = _read_3mf(out / "assembly.3mf")["items"]
-    S, N, R = (_manifold(m.vertices, m.faces) for m in (screw, nut, roller))
-    SN = _manifold(nominal.vertices, nominal.faces)
+    screw, nut, roller = (stl_merged(out / f"{n}.stl") for n in ("screw", "nut", "roller"))
+    nominal = stl_merged(out / "screw_nominal.stl")
+    items = read_3mf(out / "assembly.3mf")["items"]
+    S, N, R = (solid(m.vertices, m.faces) for m in (screw, nut, roller))
+    SN = solid(nominal.vertices, nominal.faces)
     for k in range(d.roller.count):
         T = items[f"roller_{k}"]
         Rk = R.transform(np.ascontiguousarray(T[:3, :4]))
@@ -191,44 +176,10 @@ def test_glb_passes_the_khronos_validator(built, tmp_path):
 
 
 # --------------------------------------------------------------------------- 3MF
-def _read_3mf(path: Path) -> dict:
-    import lib3mf
-
-    import locale
-
-    w = lib3mf.get_wrapper()
-    model = w.CreateModel()
-    saved = locale.setlocale(locale.LC_ALL, None)
-    try:
-        model.QueryReader("3mf").ReadFromFile(str(path))
-    finally:
-        locale.setlocale(locale.LC_ALL, saved)    # lib3mf leaves the C locale behind
-    objects = {}
-    it = model.GetMeshObjects()
-    while it.MoveNext():
-        o = it.GetCurrentMeshObject()
-        V = np.array([list(p.Coordinates) for p in o.GetVertices()], dtype=np.float64)
-        F = np.array([list(t.Indices) for t in o.GetTriangleIndices()], dtype=np.int64)
-        objects[o.GetName()] = (V, F, o.GetResourceID())
-    items, item_object = {}, {}
-    bi = model.GetBuildItems()
-    while bi.MoveNext():
-        b = bi.GetCurrent()
-        f = b.GetObjectTransform().Fields
-        T = np.eye(4)
-        for col in range(4):
-            for row in range(3):
-                T[row, col] = f[col][row]
-        items[b.GetPartNumber()] = T
-        item_object[b.GetPartNumber()] = b.GetObjectResource().GetName()
-    return {"unit": model.GetUnit(), "objects": objects, "items": items, "item_object": item_object,
-            "millimetre": lib3mf.ModelUnit.MilliMeter}
-
-
 def test_3mf_reads_back_with_one_object_per_part_in_millimetres(built):
     d, out, report = built
-    m = _read_3mf(out / "assembly.3mf")
-    assert m["unit"] == m["millimetre"]
+    m = read_3mf(out / "assembly.3mf")
+    assert m["unit"] == m["mm"]
     assert {"screw", "nut", "roller"} <= set(m["objects"])
     rollers = [f"roller_{k}" for k in range(d.roller.count)]
     assert {m["item_object"][r] for r in rollers} == {"roller"}     # one mesh, z build items
@@ -238,7 +189,7 @@ def test_3mf_reads_back_with_one_object_per_part_in_millimetres(built):
         np.testing.assert_allclose(m["items"][f"roller_{k}"], roller_transform(d, k), atol=1e-5)
     # volumes equal the per-part STLs' (both float32 coordinates)
     for name in ("screw", "roller", "nut"):
-        V, F, _ = m["objects"][name]
+        V, F = m["objects"][name]
         vol = trimesh.Trimesh(V, F, process=False).volume
         # lib3mf writes float32 coordinates rounded to about 8 significant digits: each vertex
         # may move by up to one float32 step (4e-6 mm at these radii) from the STL's, so the
@@ -262,4 +213,18 @@ def test_writing_3mf_leaves_the_process_locale_as_it_was(tmp_path):
                   (SceneNode("box", "box"),), "locale test")
     write_3mf(scene, tmp_path / "box.3mf")
     assert locale.setlocale(locale.LC_ALL, None) == before
-    assert _read_3mf(tmp_path / "box.3mf")["objects"]["box"][0].shape == (8, 3)
+    assert read_3mf(tmp_path / "box.3mf")["objects"]["box"][0].shape == (8, 3)
+
+
+def test_assembly_stl_is_closed_and_holds_every_part(built):
+    """assembly.stl read back by trimesh: closed (every edge used by exactly two faces after
+    merging coincident vertices, although a roller and its gears, the nut and its ring gears,
+    touch face to face), and its volume is the sum of the 3MF build items' (an independent
+    reader of the other file), within the float32 rounding."""
+    d, out, report = built
+    stl = trimesh.load(out / "assembly.stl", file_type="stl")
+    assert stl.is_watertight and stl.is_winding_consistent
+    m = read_3mf(out / "assembly.3mf")
+    vols = {name: trimesh.Trimesh(V, F, process=False).volume for name, (V, F) in m["objects"].items()}
+    total = sum(vols[m["item_object"][item]] for item in m["items"])
+    assert abs(stl.volume - total) <= stl.area * 4e-6, (stl.volume, total)

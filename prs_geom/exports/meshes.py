@@ -4,9 +4,12 @@
   screw is the THEORETICAL one (pitch diameter from the contact analysis: the state the
   analysis certifies as free of interference); ``screw_nominal.stl`` holds the nominal screw
   when asked (``prs-geom build --screw nominal``).
-* ``assembly.stl``: every placed part in the screw frame, for a quick look. It is a
-  multi-body file: STL has no notion of parts, so the touching parts arrive as separate
-  shells in one triangle list (CAD users take the GLB, 3MF or per-part STLs).
+* ``assembly.stl``: the assembly in the screw frame, for a quick look; the parts of each
+  rigid body (the nut and its ring gears, each roller and its gears) united by
+  :func:`rigid_body_arrays`, so that faces touching face to face share no edges and every
+  edge of the file bounds exactly two triangles. It is a multi-body file: STL has no notion
+  of parts, so the shells arrive in one triangle list (CAD users take the GLB, 3MF or
+  per-part STLs).
 * ``assembly.glb`` (glTF 2.0, metres, +Y up) and ``assembly.3mf`` (millimetres), written by
   :mod:`prs_geom.exports.scene`: one named node / build item per part and per roller.
 
@@ -58,6 +61,47 @@ def stl_header(part: str, design_hash: str, frame: str = "part frame") -> str:
     return f"prs_geom {part}; units mm; {frame}; design sha256 {design_hash}"[:80]
 
 
+def rigid_body_arrays(asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Vertices and faces of the assembly with the parts of each rigid body united (manifold3d,
+    float64): a roller and its gears, the nut and its ring gears touch at end faces, whose
+    coincident vertices would otherwise make edges used by four faces (manifold3d may keep
+    face-touching parts as separate shells, but their boundaries no longer coincide). Bodies whose parts share one frame
+    (every roller) are united once and placed by transform."""
+    import manifold3d
+
+    bodies: dict[str, list[tuple[object, NDArray[np.float64]]]] = {}
+    for name, (mesh, T, _) in asm.placed.items():
+        bodies.setdefault(asm.rigid_body(name), []).append((mesh, T))
+    united: dict[tuple[int, ...], tuple[NDArray[np.float64], NDArray[np.int64]]] = {}
+    Vs, Fs, v0 = [], [], 0
+    for body, parts in bodies.items():
+        T = parts[0][1]
+        same_frame = all(np.array_equal(Tp, T) for _, Tp in parts)
+        key = tuple(id(m) for m, _ in parts) if same_frame else (id(parts),)
+        if key not in united:
+            if len(parts) == 1:
+                united[key] = (np.asarray(parts[0][0].vertices, dtype=np.float64), np.asarray(parts[0][0].faces))
+            else:
+                solid = None
+                for m, Tp in parts:
+                    piece = manifold3d.Manifold(manifold3d.Mesh64(
+                        np.ascontiguousarray(m.vertices, dtype=np.float64),
+                        np.ascontiguousarray(m.faces, dtype=np.uint64)))
+                    if not same_frame:
+                        piece = piece.transform(np.ascontiguousarray(Tp[:3, :4]))
+                    solid = piece if solid is None else solid + piece
+                mg = solid.to_mesh64()
+                united[key] = (np.array(np.asarray(mg.vert_properties)[:, :3], dtype=np.float64),
+                               np.array(mg.tri_verts, dtype=np.int64))
+        V, F = united[key]
+        if same_frame:
+            V = V @ T[:3, :3].T + T[:3, 3]
+        Vs.append(V)
+        Fs.append(F + v0)
+        v0 += len(V)
+    return np.concatenate(Vs), np.concatenate(Fs)
+
+
 def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None) -> dict[str, str]:
     """Write the mesh files listed in the module docstring; returns {file name: description}.
 
@@ -74,10 +118,11 @@ def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None
     if nominal_screw is not None:
         write_stl(nominal_screw, out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
         files["screw_nominal.stl"] = "nominal screw thread (not the analysed state), part frame, binary STL (mm)"
-    V, F = asm.combined_arrays()
+    V, F = rigid_body_arrays(asm)
     (out / "assembly.stl").write_bytes(stl_bytes(V, F, stl_header("assembly, multi-body", design_hash,
                                                                    "screw frame")))
-    files["assembly.stl"] = "all parts placed in the screw frame, multi-body binary STL (mm), for viewing"
+    files["assembly.stl"] = ("the assembly in the screw frame, parts of each rigid body united; multi-body "
+                             "binary STL (mm), for viewing")
     scene = assembly_scene(asm, asm.design.name)
     write_glb(scene, out / "assembly.glb")
     files["assembly.glb"] = "glTF 2.0 binary: one named node per part and roller, metres, +Y up, PBR materials"

@@ -1154,6 +1154,8 @@ def roller_gear_phasing(pinion: SpurGear, ring: SpurGear, carrier_angles_rad: Ar
         chi_k, the spins the thread imposes (rad), chi_k = -n_s psi_k
         (``frames.roller_spin``).
 
+    Notes
+    -----
     With psi_k = 2 pi k / z and chi_k = -n_s psi_k the residual of roller k is
     -(2 pi k / z)(z2 - n_s z1)/z1 mod 2 pi / z1: zero for all k exactly when z divides
     (z_ring - n_s z_g) (:func:`phasing_divisible`).
@@ -1280,6 +1282,8 @@ def min_clearance_2d(outline_a: ArrayLike, transform_a: ArrayLike, outline_b: Ar
         Which side of each polygon is material: True for a gear (inside), False for a ring
         gear outline (material outside the bore polygon).
 
+    Notes
+    -----
     Method (all numpy, exact): segments in groups of 16 with bounding circles. An upper bound
     d_ub (a vertex-to-vertex distance of the most promising group pair, then the distance
     between two segment midpoints, both points of the boundaries) prunes every group pair and
