@@ -228,6 +228,66 @@ def cmd_loads(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_rating(args: argparse.Namespace) -> int:
+    from prs_geom.analysis.contact import analyse_contact
+    from prs_geom.analysis.loads import build_model
+    from prs_geom.analysis.rating import analyse_rating, rating_case
+
+    design = _load(args.design)
+    _warn(design)
+    spectrum = None
+    if args.spectrum:
+        from prs_geom.model.io import load_spectrum
+
+        spectrum = load_spectrum(args.spectrum)
+        if not spectrum.has_speeds:
+            raise DesignError(f"spectrum file {args.spectrum!r}: case[0].speed_rpm", None,
+                              "the ratings need speed_rpm on every [[case]] (the life is counted in revolutions)")
+    case = rating_case(design, spectrum, args.mean_load, args.speed_rpm, args.life_hours, args.fw, args.reliability)
+    contact = analyse_contact(design)
+    model = build_model(design, contact)
+    robust, note = None, "needs a load spectrum (--spectrum FILE)"
+    if spectrum is not None:
+        from prs_geom import studies
+
+        # the robust design over this duty and the design's error model (one sample without one)
+        tol = design.tolerances
+        samples = 200 if tol is not None and tol.any_error else 1
+        res = studies.robust_pitch(design, spectrum, tol, samples=samples, contact=contact, model=model,
+                                   execution=studies.Execution(workers=1))
+        robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
+    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).report()
+    if args.json:
+        _print_json(rep)
+        return EXIT_OK
+    print(f"design {design.name}: {rep['method']}")
+    print(f"C_a {rep['dynamic_load_rating_n']:.0f} N, C_0a {rep['static_load_rating_n']:.0f} N; duty "
+          f"({rep['duty_source']}): F_m {rep['equivalent_load_n']:.6g} N at n_m {rep['equivalent_speed_rpm']:.6g} rpm, "
+          f"f_w {rep['operating_factor']:g}, reliability {rep['reliability_pct']:g} % (a_1 "
+          f"{rep['reliability_factor']:.3g})")
+    print(f"catalogue life {rep['l10_revolutions']:.4g} revolutions = {rep['l10_hours']:.5g} h; required C_a for "
+          f"{rep['target_life_hours']:g} h: {rep['required_dynamic_load_n']:.0f} N; static safety "
+          f"{rep['static_safety']:.3g}")
+    print(f"{'life from the tooth loads':<28}{'L (h)':>12}{'x constant':>12}{'p_max MPa':>11}{'s0':>8}")
+    for k, v in rep["distribution_life"].items():
+        print(f"  {k:<26}{v['l10_hours']:12.5g}{v['gain_factor_over_constant_pitch']:12.4f}"
+              f"{v['max_hertz_pressure_mpa']:11.0f}{v['static_safety']:8.3g}")
+    if isinstance(rep["robust"], str):
+        print(f"  robust pitch: {rep['robust']}")
+    lim, eff, dn = rep["limits"], rep["efficiency"], rep["double_nut"]
+    print(f"limits: critical speed {lim['critical_speed_rpm']:.5g} rpm ({lim['critical_speed_ends']}, "
+          f"{lim['unsupported_length_mm']:g} mm), d n limit {lim['dn_speed_limit_rpm']:.5g} rpm, permissible "
+          f"{lim['permissible_speed_rpm']:.5g} rpm; Euler buckling {lim['buckling_load_n']:.5g} N "
+          f"({lim['buckling_ends']}), permissible {lim['permissible_buckling_load_n']:.5g} N")
+    print(f"efficiency {eff['forward']:.3f} forward, {eff['back_driving']:.3f} back-driving (mu "
+          f"{eff['friction_coefficient']:g}); drive torque {eff['drive_torque_nm']:.4g} N m, holding torque "
+          f"{eff['holding_torque_nm']:.4g} N m at {eff['torque_load_n']:g} N")
+    st = rep["stiffness"]
+    print(f"stiffness {st['secant_n_per_um'][0]:.0f} ... {st['secant_n_per_um'][-1]:.0f} N/um (secant); double nut "
+          f"preload {dn['preload_n']:.0f} N, lost at {dn['lift_off_load_n']:.0f} N")
+    return EXIT_OK
+
+
 def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
     """Target coefficients from .json / .toml ({nut_roller: [...], roller_screw: [...]}) or
     .csv (columns tooth, nut_roller, roller_screw)."""
@@ -591,7 +651,7 @@ def make_parser() -> argparse.ArgumentParser:
                    help="screw meshes to export: screw.stl is always the theoretical screw (the state "
                         "the analysis certifies); 'nominal' also writes screw_nominal.stl")
     p.add_argument("--step", action="store_true",
-                   help="also write parts.step: the screw, roller and nut as B-rep solids (STEP AP214; needs "
+                   help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
                         "pip install \"prs-geom[step]\"; several seconds)")
     budget_arg(p)
     p.set_defaults(func=cmd_build)
@@ -623,6 +683,24 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--load", type=float, metavar="N", help="axial load in N instead of the design load")
     p.add_argument("--json", action="store_true", help="print the report.json 'loads' section")
     p.set_defaults(func=cmd_loads)
+
+    p = sub.add_parser("rating", help="load ratings, life, limits, efficiency and stiffness",
+                       description="Basic dynamic and static axial load ratings from the contact geometry, the "
+                                   "L10 life of a duty (catalogue form and from the actual tooth loads of constant, "
+                                   "equal-load and, with a spectrum, robust pitch), critical speed, buckling, nut "
+                                   "speed limit, efficiency, torques and axial stiffness with a preloaded double "
+                                   "nut (docs/theory/ratings.md). Defaults come from the design's [rating] and "
+                                   "[supports] sections.")
+    design_arg(p)
+    p.add_argument("--spectrum", metavar="FILE", help="duty cycle: [[case]] load_n, time_share, speed_rpm (speeds "
+                                                      "required); also designs the robust pitch for it")
+    p.add_argument("--mean-load", type=float, metavar="N", help="equivalent load F_m (N) instead of the design load")
+    p.add_argument("--speed-rpm", type=float, metavar="R", help="mean screw speed n_m (rpm; default rating.speed_rpm)")
+    p.add_argument("--life-hours", type=float, metavar="H", help="target life for the required dynamic load rating (h)")
+    p.add_argument("--fw", type=float, metavar="F", help="operating factor f_w, 1 to 5 (default rating.operating_factor)")
+    p.add_argument("--reliability", type=float, metavar="PCT", help="reliability of the life, 90 to 99 %% (default 90)")
+    p.add_argument("--json", action="store_true", help="print the report.json 'rating' section")
+    p.set_defaults(func=cmd_rating)
 
     p = sub.add_parser("design-pitch", help="pitch lists for equal (or target) load sharing",
                        description="Roller and nut pitch lists that give equal load sharing (every "

@@ -40,6 +40,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from prs_geom.analysis.gears import GearAnalysis
     from prs_geom.analysis.machining import MachiningSheet
+    from prs_geom.analysis.rating import RatingResult
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
 
@@ -113,12 +114,12 @@ class BuildOptions:
         Also export the nominal screw (``screw_nominal.stl``; ``--screw nominal``). The
         exported ``screw.stl`` is always the theoretical screw the analysis certifies.
     step : bool
-        Also write ``parts.step``: screw (theoretical), roller and nut as B-rep solids
+        Also write ``screw.step``, ``roller.step``, ``nut.step``: B-rep solids (screw theoretical)
         (``--step``; needs the optional extra ``prs-geom[step]``; docs/step.md).
     """
 
     nominal_screw: bool = False
-    #: also write parts.step (B-rep solids; optional extra [step], several seconds)
+    #: also write <part>.step (B-rep solids; optional extra [step], several seconds)
     step: bool = False
 
 
@@ -135,6 +136,7 @@ class BuildContext:
     contact: ContactResult | None = None
     gears: "GearAnalysis | None" = None
     loads: LoadsResult | None = None
+    rating: "RatingResult | None" = None
     tolerance: "ToleranceStudy | None" = None
     meshes: MeshStage | None = None
     machining: dict[str, "MachiningSheet"] | None = None
@@ -210,6 +212,35 @@ def stage_loads(ctx: BuildContext) -> None:
     ctx.report["files"] += files
 
 
+#: Why the build has no robust pitch in its rating section.
+BUILD_ROBUST_NOTE = ("not computed in the build: the robust pitch needs a load spectrum; run "
+                     "'prs-geom rating DESIGN --spectrum FILE'")
+
+
+def stage_rating(ctx: BuildContext) -> None:
+    """Load ratings, life (catalogue and from the tooth loads of constant, equal-load and the
+    design's pitch lists), limits, efficiency and stiffness (docs/theory/ratings.md): report
+    section ``rating`` and the ``rating`` plot. Reuses the contact and load stages' results;
+    the robust pitch is left to ``prs-geom rating --spectrum`` (a Monte Carlo study)."""
+    from prs_geom.analysis.rating import analyse_rating
+    from prs_geom.exports.plots import plot_rating
+
+    d, loads = ctx.design, ctx.loads
+    equal = (loads.equal_load.roller_mm, loads.equal_load.nut_mm)
+    ctx.rating = r = analyse_rating(d, ctx.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
+    ctx.report["rating"] = sec = r.report()
+    lim = sec["limits"]
+    if not lim["speed_ok"]:
+        ctx.report["warnings"].append(
+            f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
+            f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
+    if not lim["buckling_ok"]:
+        ctx.report["warnings"].append(
+            f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
+            f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    ctx.report["files"] += plot_rating(ctx.out, d.name, r.curves, ctx.plots_svg)
+
+
 def stage_tolerance(ctx: BuildContext) -> None:
     """Monte Carlo tolerance study, only for a design with a ``[tolerances]`` section
     (docs/theory/tolerances.md): report section ``tolerance`` and the histogram/CDF plot."""
@@ -259,13 +290,20 @@ def stage_meshes(ctx: BuildContext) -> None:
     if ctx.options.step:
         from prs_geom.exports.step import write_step
 
-        ctx.report["step"] = section = write_step(d, ctx.out / "parts.step", screw_profile=ctx.contact.screw_profile)
-        if section["file"]:
-            ctx.report["files"].append(section["file"])
+        # one file per part, named like its STL (the CAD habit: a part, a file)
+        section: dict[str, Any] = {"files": [], "parts": {}}
+        for part in ("screw", "roller", "nut"):
+            one = write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.contact.screw_profile)
+            section.update({k: v for k, v in one.items() if k not in ("file", "written", "parts")})
+            section["parts"][part] = {**one["parts"][part], "file": one["file"]}
+            if one["file"]:
+                section["files"].append(one["file"])
+        ctx.report["step"] = section
+        ctx.report["files"] += section["files"]
         for part, row in section["parts"].items():
             if not row["valid"]:
-                ctx.report["warnings"].append(f"STEP: the {part} could not be made a valid solid and was left "
-                                              f"out of parts.step: {row['reason']}")
+                ctx.report["warnings"].append(f"STEP: the {part} could not be made a valid solid; "
+                                              f"{part}.step was not written: {row['reason']}")
 
 
 def stage_checks(ctx: BuildContext) -> None:
@@ -326,6 +364,7 @@ def stage_html(ctx: BuildContext) -> None:
 
     write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
                contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
+               rating=ctx.report.get("rating"),
                tolerance=ctx.report.get("tolerance"),
                mesh_checks=ctx.meshes.checks if ctx.meshes else None,
                checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date())
@@ -338,6 +377,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("contact", stage_contact),
     ("gears", stage_gears),
     ("loads", stage_loads),
+    ("rating", stage_rating),
     ("tolerance", stage_tolerance),
     ("meshes", stage_meshes),
     ("checks", stage_checks),

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from cli_helpers import run, to_toml
 from prs_geom import pipeline
 from prs_geom.model.io import design_to_dict
-from prs_geom.model.design import Tolerances, default_design
+from prs_geom.model.design import RatingSettings, Supports, Tolerances, default_design
 
 
 def _write(data, path):
@@ -88,6 +88,20 @@ INVALID = {
     "gears.pressure_angle_deg": out_of(14.5, 30.0),
     "gears.backlash_mm": out_of(0.0, 1.0),
     "gears.face_width_mm": non_positive,
+    # the optional [supports] and [rating] sections
+    "supports.unsupported_length_mm": non_positive,
+    "supports.critical_speed_ends": bad_choice(("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")),
+    "supports.buckling_ends": bad_choice(("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")),
+    "supports.buckling_safety": out_of(1.0, 20.0),
+    "supports.critical_speed_factor": out_of(0.0, 1.0),
+    "rating.friction_coefficient": out_of(0.0, 0.5),
+    "rating.speed_rpm": st.one_of(non_positive, st.floats(1e5, 1e9, exclude_min=True)),
+    "rating.life_hours": st.one_of(non_positive, st.floats(1e7, 1e12, exclude_min=True)),
+    "rating.reliability_pct": out_of(90.0, 99.0),
+    "rating.operating_factor": out_of(1.0, 5.0),
+    "rating.static_pressure_limit_mpa": out_of(1000.0, 6000.0),
+    "rating.preload_n": non_positive,
+    "rating.dn_limit_mm_rpm": st.one_of(non_positive, st.floats(1e7, 1e12, exclude_min=True)),
     # the optional [tolerances] section
     "tolerances.distribution": bad_choice(("uniform", "normal")),
     **{f"tolerances.{k}": out_of(0.0, 100.0) for k in ("flank_um", "roller_diameter_um", "screw_eccentricity_um",
@@ -123,6 +137,8 @@ def test_every_design_field_has_an_invalid_case():
     leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
     leaves |= {"gears.module_mm", "gears.face_width_mm"}        # absent: by the sizing rule
     leaves |= {f"tolerances.{f.name}" for f in dataclasses.fields(Tolerances)}  # optional section
+    leaves |= {f"supports.{f.name}" for f in dataclasses.fields(Supports)}      # optional section
+    leaves |= {f"rating.{f.name}" for f in dataclasses.fields(RatingSettings)}  # optional section
     assert leaves == set(INVALID)
 
 

@@ -20,7 +20,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run, to_toml
-from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread, Tolerances
+from prs_geom.model.design import (GearSettings, MeshSettings, PRSDesign, RatingSettings, Roller, Supports, Thread,
+                                   Tolerances)
 from prs_geom.model.io import design_to_dict, dumps_toml
 from prs_geom.pipeline import load_any_design as load_design
 
@@ -44,6 +45,10 @@ BASES = [
     _with_header(design_to_dict(PRSDesign(name="toleranced", tolerances=Tolerances(
         flank_um=0.5, nut_flank_um=(0.4,) * 20, roller_diameter_um=1.0, samples=5, load_fractions=(0.5, 1.0))))),
     _with_header(design_to_dict(load_design(EXAMPLES / "graded-pitch.toml"))),
+    # the optional [supports] and [rating] sections and explicit [gears] values (added later)
+    _with_header(design_to_dict(PRSDesign(name="rated", supports=Supports(unsupported_length_mm=300.0),
+                                          rating=RatingSettings(preload_n=3000.0),
+                                          gears=GearSettings(module_mm=0.4, face_width_mm=3.0)))),
     _with_header(design_to_dict(load_design(EXAMPLES / "harmonic.toml")), "harmonic"),
 ]
 

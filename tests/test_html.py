@@ -38,7 +38,7 @@ def test_report_is_self_contained(report_html):
     # nothing is fetched: no src/href to another file or host, no external script or style
     assert not re.search(r"""(src|href)\s*=\s*["'](https?:|//|/|\.\.?/)""", text)
     assert "<link" not in text and "@import" not in text and "<script src" not in text
-    assert text.count("<svg") == 3 and "scene-data" in text
+    assert text.count("<svg") == 4 and "scene-data" in text   # loads, pitch, off-design, rating
 
 
 def test_report_loads_without_errors_and_viewer_draws(report_html, tmp_path):

@@ -358,9 +358,9 @@ def test_theoretical_screw_and_nut_are_valid_solids(ocp, design_name, heavy_scal
 
 
 @pytest.mark.heavy
-def test_build_with_step_writes_parts_step_with_three_valid_named_solids(ocp, tmp_path):
-    """``prs-geom build --step``: parts.step with the theoretical screw, roller and nut, each
-    valid, and the report's step section says so; read back independently of the writer."""
+def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
+    """``prs-geom build --step``: screw.step (theoretical), roller.step and nut.step, each one
+    valid named solid, and the report's step section says so; read back with OCP."""
     from prs_geom.exports.step import read_step
     from prs_geom.model.design import MeshSettings, PRSDesign, Thread
     from prs_geom.pipeline import BuildOptions, build
@@ -368,7 +368,9 @@ def test_build_with_step_writes_parts_step_with_three_valid_named_solids(ocp, tm
     d = PRSDesign(name="steptest", thread=Thread(engaged_teeth=6),
                   mesh=MeshSettings(chord_tolerance_mm=0.02))
     report = build(d, tmp_path / "out", options=BuildOptions(step=True))
-    assert "parts.step" in report["files"] and report["step"]["written"] == ["screw", "roller", "nut"]
+    assert report["step"]["files"] == ["screw.step", "roller.step", "nut.step"]
+    assert set(report["files"]) >= set(report["step"]["files"])
     assert all(row["valid"] and abs(row["volume_rel_diff"]) < 1e-3 for row in report["step"]["parts"].values())
-    back = read_step(tmp_path / "out" / "parts.step")
-    assert sorted(back.names) == ["nut", "roller", "screw"] and all(brep_valid(s) for s in back.shapes)
+    for part in ("screw", "roller", "nut"):
+        back = read_step(tmp_path / "out" / f"{part}.step")
+        assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)

@@ -187,6 +187,53 @@ def _checks_html(checks: dict[str, Any], contact: ContactResult | None) -> str:
     return "".join(out)
 
 
+#: Labels of the pitch variants of the rating section.
+_RATING_VARIANTS = {"constant_pitch": "constant pitch", "equal_load": "equal-load pitch",
+                    "design": "design pitch lists", "robust": "robust pitch"}
+
+
+def _rating_html(r: dict[str, Any], plots_svg: dict[str, str]) -> str:
+    """Ratings, life (catalogue and from the tooth loads), limits, efficiency, stiffness."""
+    out = ["<h2 id='rating'>Ratings and life</h2>",
+           f"<p class='note'>{html.escape(r['method'])}; duty: {html.escape(r['duty_source'])}.</p>"]
+    out.append(_table([
+        ["basic dynamic axial load rating C_a (N)", r["dynamic_load_rating_n"]],
+        ["basic static axial load rating C_0a (N)", r["static_load_rating_n"]],
+        ["equivalent (cubic-mean) load F_m (N)", r["equivalent_load_n"]],
+        ["equivalent speed n_m (rpm)", r["equivalent_speed_rpm"]],
+        ["operating factor f_w", r["operating_factor"]],
+        [f"reliability {r['reliability_pct']:g} %: factor a_1", r["reliability_factor"]],
+        ["L life, catalogue (revolutions)", r["l10_revolutions"]],
+        ["L life, catalogue (h)", r["l10_hours"]],
+        [f"required C_a for {r['target_life_hours']:g} h (N)", r["required_dynamic_load_n"]],
+        ["static safety C_0a / F_max", r["static_safety"]]]))
+    rows = [[_RATING_VARIANTS.get(k, k), v["l10_hours"], v["gain_over_constant_pitch_hours"],
+             v["gain_factor_over_constant_pitch"], v["max_hertz_pressure_mpa"], v["static_safety"]]
+            for k, v in r["distribution_life"].items()]
+    out.append("<h3>Life from the tooth loads</h3>" + _table(
+        rows, ["pitch lists", "L life (h)", "gain over constant pitch (h)", "life factor over constant pitch",
+               "max Hertz pressure (MPa)", "static safety (p_lim / p_max)^3"]))
+    if isinstance(r.get("robust"), str):
+        out.append(f"<p class='note'>Robust pitch: {html.escape(r['robust'])}.</p>")
+    lim, eff, dn = r["limits"], r["efficiency"], r["double_nut"]
+    out.append("<h3>Limits, efficiency, stiffness</h3>" + _table([
+        [f"critical speed ({lim['critical_speed_ends']}, {lim['unsupported_length_mm']:g} mm) (rpm)",
+         lim["critical_speed_rpm"]],
+        ["speed limit d n (rpm)", lim["dn_speed_limit_rpm"]],
+        ["permissible speed (rpm)", lim["permissible_speed_rpm"]],
+        [f"Euler buckling load ({lim['buckling_ends']}) (N)", lim["buckling_load_n"]],
+        [f"permissible buckling load (safety {lim['buckling_safety']:g}) (N)", lim["permissible_buckling_load_n"]],
+        [f"efficiency forward (mu {eff['friction_coefficient']:g})", eff["forward"]],
+        ["efficiency back-driving", eff["back_driving"]],
+        [f"drive torque at {eff['torque_load_n']:g} N (N m)", eff["drive_torque_nm"]],
+        ["holding torque against back-driving (N m)", eff["holding_torque_nm"]],
+        ["double nut preload (N)", dn["preload_n"]],
+        ["double nut: preload lost at (N)", dn["lift_off_load_n"]]]))
+    if "rating" in plots_svg:
+        out.append("<div class='plots'>" + _svg(plots_svg["rating"]) + "</div>")
+    return "".join(out)
+
+
 def _flank_text(tol: dict[str, Any]) -> Any:
     """The flank tolerance: one value, or the per-tooth range when the lists differ."""
     values = [x for v in tol["per_tooth_flank_um"].values() for x in v]
@@ -226,7 +273,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
                mesh_checks: list[dict[str, Any]] | None = None,
                tolerance: dict[str, Any] | None = None, checks: dict[str, Any] | None = None,
-               inspection: dict[str, Any] | None = None, date: str = "") -> None:
+               inspection: dict[str, Any] | None = None, date: str = "",
+               rating: dict[str, Any] | None = None) -> None:
     """Write ``report.html`` from the stage results of a build.
 
     ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
@@ -268,6 +316,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                              ["axial stiffness (N/um)", L["axial_stiffness_N_per_um"]]]))
         shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
         parts.append("<div class='plots'>" + "".join(_svg(t) for t in shown) + "</div>")
+    if rating is not None:
+        parts.append(_rating_html(rating, plots_svg or {}))
     if tolerance is not None:
         parts.append(_tolerance_html(tolerance, plots_svg or {}))
     if checks:

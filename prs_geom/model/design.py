@@ -437,6 +437,108 @@ class GearSettings:
         _set(self, "face_width_mm", optional_size("face_width_mm", self.face_width_mm))
 
 
+#: End-support cases of the screw for critical speed and buckling (docs/theory/ratings.md):
+#: the end nearer the nut first, "supported" = a radial bearing that lets the end tilt.
+END_SUPPORTS = ("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")
+
+
+@dataclass(frozen=True)
+class Supports:
+    """How the screw is held, for its critical speed and buckling load (docs/theory/ratings.md).
+
+    ``unsupported_length_mm``: free length between the bearings (or bearing and nut) that
+    bends and buckles (mm); absent = ``screw.length_mm``. ``critical_speed_ends`` and
+    ``buckling_ends``: the end fixity of each case, one of :data:`END_SUPPORTS` (a shaft
+    may be mounted differently for whirl, where the nut does not hold it, than for
+    buckling). ``buckling_safety``: the permissible buckling load is the Euler load divided
+    by this (>= 1). ``critical_speed_factor``: the permissible speed is this fraction of the
+    first whirling speed (0 < f <= 1; catalogues use 0.5 to 0.8).
+    """
+
+    unsupported_length_mm: float | None = None
+    critical_speed_ends: str = "fixed-supported"
+    buckling_ends: str = "fixed-supported"
+    buckling_safety: float = 2.0
+    critical_speed_factor: float = 0.8
+
+    def __post_init__(self) -> None:
+        _set(self, "unsupported_length_mm", optional_size("unsupported_length_mm", self.unsupported_length_mm))
+        choice("critical_speed_ends", self.critical_speed_ends, END_SUPPORTS)
+        choice("buckling_ends", self.buckling_ends, END_SUPPORTS)
+        s = real("buckling_safety", self.buckling_safety)
+        if not 1.0 <= s <= 20.0:
+            raise DesignError("buckling_safety", self.buckling_safety, "must be from 1 to 20")
+        _set(self, "buckling_safety", s)
+        f = real("critical_speed_factor", self.critical_speed_factor)
+        if not 0.0 < f <= 1.0:
+            raise DesignError("critical_speed_factor", self.critical_speed_factor, "must be in (0, 1]")
+        _set(self, "critical_speed_factor", f)
+
+
+#: Reliabilities (%) the life can be stated for: ISO 3408-5 and ISO 281:1990 tabulate a_1
+#: from 90 to 99 % (docs/theory/ratings.md).
+RELIABILITY_RANGE = (90.0, 99.0)
+
+
+@dataclass(frozen=True)
+class RatingSettings:
+    """Inputs of the ratings, life and efficiency (docs/theory/ratings.md).
+
+    ``friction_coefficient``: Coulomb friction mu on the thread flanks; the friction angle
+    is rho' = atan(mu / cos(beta)). ``speed_rpm``: mean screw speed for the life in hours
+    when no spectrum gives one. ``life_hours``: target life for the required dynamic load
+    rating. ``reliability_pct``: reliability of the stated life (90 to 99 %, factor a_1).
+    ``operating_factor``: f_w >= 1 on the load (shocks, vibration). ``static_pressure_limit_mpa``:
+    the Hertz pressure of the static load rating (4200 MPa for hardened bearing steel in
+    point contact, ISO 76). ``preload_n``: preload of the double-nut option; absent =
+    design load / 2^(3/2), the preload a Hertzian double nut loses exactly at the design
+    load. ``dn_limit_mm_rpm``: the nut speed limit as nominal diameter x speed (mm/min),
+    the maker's figure for the roller screw.
+    """
+
+    friction_coefficient: float = 0.025
+    speed_rpm: float = 100.0
+    life_hours: float = 20_000.0
+    reliability_pct: float = 90.0
+    operating_factor: float = 1.0
+    static_pressure_limit_mpa: float = 4200.0
+    preload_n: float | None = None
+    dn_limit_mm_rpm: float = 150_000.0
+
+    def __post_init__(self) -> None:
+        mu = real("friction_coefficient", self.friction_coefficient)
+        if not 0.0 <= mu <= 0.5:
+            raise DesignError("friction_coefficient", self.friction_coefficient, "must be in [0, 0.5]")
+        _set(self, "friction_coefficient", mu)
+        n = positive("speed_rpm", self.speed_rpm)
+        if n > 1e5:
+            raise DesignError("speed_rpm", self.speed_rpm, "must be at most 100000 rpm")
+        _set(self, "speed_rpm", n)
+        h = positive("life_hours", self.life_hours)
+        if h > 1e7:
+            raise DesignError("life_hours", self.life_hours, "must be at most 1e7 hours")
+        _set(self, "life_hours", h)
+        r = real("reliability_pct", self.reliability_pct)
+        if not RELIABILITY_RANGE[0] <= r <= RELIABILITY_RANGE[1]:
+            raise DesignError("reliability_pct", self.reliability_pct,
+                              "must be from 90 to 99 % (the range of the a_1 table of ISO 3408-5 / ISO 281:1990)")
+        _set(self, "reliability_pct", r)
+        fw = real("operating_factor", self.operating_factor)
+        if not 1.0 <= fw <= 5.0:
+            raise DesignError("operating_factor", self.operating_factor, "must be from 1 to 5")
+        _set(self, "operating_factor", fw)
+        p = real("static_pressure_limit_mpa", self.static_pressure_limit_mpa)
+        if not 1000.0 <= p <= 6000.0:
+            raise DesignError("static_pressure_limit_mpa", self.static_pressure_limit_mpa,
+                              "must be from 1000 to 6000 MPa (hardened steel: 4000 to 4200)")
+        _set(self, "static_pressure_limit_mpa", p)
+        _set(self, "preload_n", optional_positive("preload_n", self.preload_n))
+        dn = positive("dn_limit_mm_rpm", self.dn_limit_mm_rpm)
+        if dn > 1e7:
+            raise DesignError("dn_limit_mm_rpm", self.dn_limit_mm_rpm, "must be at most 1e7 mm/min")
+        _set(self, "dn_limit_mm_rpm", dn)
+
+
 # --------------------------------------------------------------------------- assembly
 @dataclass(frozen=True)
 class PRSDesign:
@@ -460,6 +562,11 @@ class PRSDesign:
     gears: GearSettings = field(default_factory=GearSettings)
     #: optional: present only when the designer states tolerances (io reads it as a table)
     tolerances: Tolerances | None = field(default=None, metadata={"section": Tolerances})
+    #: optional: screw supports for critical speed and buckling (absent: the defaults of
+    #: :class:`Supports`, unsupported length = screw length)
+    supports: Supports | None = field(default=None, metadata={"section": Supports})
+    #: optional: inputs of the ratings (absent: the defaults of :class:`RatingSettings`)
+    rating: RatingSettings | None = field(default=None, metadata={"section": RatingSettings})
 
     def __post_init__(self) -> None:
         check_name(self.name)

@@ -79,6 +79,21 @@ FIELD_COMMENTS: dict[str, str] = {
     "tolerances.source": "where these tolerances come from",
     "tolerances.target_ldc": "worst load-distribution coefficient the synthesis targeted",
     "tolerances.confidence": "probability of meeting target_ldc the synthesis guaranteed",
+    "supports.unsupported_length_mm": "free screw length between the supports (mm); omit for screw.length_mm",
+    "supports.critical_speed_ends": 'end fixity for the critical speed: "fixed-fixed", "fixed-supported", '
+                                    '"supported-supported" or "fixed-free"',
+    "supports.buckling_ends": 'end fixity for buckling: "fixed-fixed", "fixed-supported", '
+                              '"supported-supported" or "fixed-free"',
+    "supports.buckling_safety": "safety on the Euler buckling load (>= 1)",
+    "supports.critical_speed_factor": "permissible fraction of the first whirling speed (0 to 1)",
+    "rating.friction_coefficient": "flank friction coefficient mu (efficiency and torque)",
+    "rating.speed_rpm": "mean screw speed (rpm) for the life in hours when no spectrum is given",
+    "rating.life_hours": "target life (h) for the required dynamic load rating",
+    "rating.reliability_pct": "reliability of the stated life (90 to 99 %)",
+    "rating.operating_factor": "operating factor f_w >= 1 on the load",
+    "rating.static_pressure_limit_mpa": "Hertz pressure of the static load rating (MPa)",
+    "rating.preload_n": "double-nut preload (N); omit for design load / 2.83",
+    "rating.dn_limit_mm_rpm": "nut speed limit as nominal diameter x speed (mm/min)",
     "kind": 'kind of design: "prs" (default) or another product line',
     "format_version": "design-file format version (files without it are version 1)",
 }
