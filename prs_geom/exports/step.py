@@ -97,6 +97,11 @@ SAMPLES_PER_SPAN = 32
 #: Lower bound of the grid columns per turn along a strand, and the refinement limit.
 MIN_SAMPLES_PER_TURN = 8
 MAX_REFINEMENTS = 6
+#: Largest overshoot (mm) of the faces' control points beyond the outer radius. CAD readers
+#: take a fast bounding box from the B-spline poles, which stand outside a curved surface
+#: by about 3 r (1 / cos(pi / n) - 1) for n columns per turn (measured: 0.053 mm on the
+#: default screw at n = 60); more columns keep that box within this of the solid's.
+POLE_OVERSHOOT_MM = 0.015
 
 
 # --------------------------------------------------------------------------- results
@@ -354,9 +359,11 @@ def _band_deviation(tm: "ThreadMesh", band: _Band, net: _Net) -> float:
 def _samples_per_turn(r_max: float, target: float) -> int:
     """Grid columns per turn along a strand for a degree-DEGREE interpolant of a circle of
     radius r_max: error about C r_max h^(DEGREE + 1), C = 2e-3 measured for DEGREE = 5
-    (quintic, default roller: 1.7e-5 mm at 12 columns per turn) with a factor 2 margin."""
+    (quintic, default roller: 1.7e-5 mm at 12 columns per turn) with a factor 2 margin; and
+    enough columns to keep the control points within ``POLE_OVERSHOOT_MM`` of the surface."""
     h = (0.5 * target / (2e-3 * r_max)) ** (1.0 / (DEGREE + 1))
-    return max(MIN_SAMPLES_PER_TURN, int(math.ceil(2.0 * math.pi / h)))
+    poles = math.pi / math.acos(1.0 / (1.0 + POLE_OVERSHOOT_MM / (3.0 * r_max)))
+    return max(MIN_SAMPLES_PER_TURN, int(math.ceil(2.0 * math.pi / h)), int(math.ceil(poles)))
 
 
 def _cross_counts(profile: "ThreadProfile", per_turn: int) -> dict[str, int]:

@@ -65,8 +65,8 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
     teeth are cut through the threaded end, so the gear's tip carries the thread and meshes
     with the screw like the thread does. Its tooth 0 sits at the phasing offset from the
     roller's theta = 0 (:func:`prs_geom.geometry.gears.roller_gear_phasing`), the same on
-    every roller. The ring gears span the same z ranges in the nut frame, tooth 0 on +x, from
-    their root to the nut body diameter.
+    every roller. The ring gears span the same z ranges in the nut frame, tooth 0 on +x, rings
+    from their root to halfway to the nut body diameter.
     """
     import manifold3d
 
@@ -98,9 +98,11 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
         m = (thread ^ prism).to_mesh64()
         out[name] = trimesh.Trimesh(np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
                                     np.array(m.tri_verts, dtype=np.int64), process=False, validate=False)
-    body = 0.5 * design.nut.outer_diameter_mm
+    # the ring gear is a ring halfway from its root to the nut body: an outer cylinder flush
+    # with the nut's would meet its differently sampled polygon in slivers when united
+    ring_outer = 0.5 * (pair.ring.root_radius_mm + 0.5 * design.nut.outer_diameter_mm)
     for name, (z0, z1) in (("ring_lo", (-w, 0.0)), ("ring_hi", (L, L + w))):
-        V, F = gear_mesh(pair.ring, z0, z1, gear_tol, outer_radius_mm=body)
+        V, F = gear_mesh(pair.ring, z0, z1, gear_tol, outer_radius_mm=ring_outer)
         out[name] = trimesh.Trimesh(V, F, process=False, validate=False)
     return out
 
