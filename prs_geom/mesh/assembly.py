@@ -20,7 +20,7 @@ from prs_geom.geometry.frames import (FIRST_MID_PITCHES, carrier_angles, part_wa
                                      roller_transform, screw_z_range, thread_length)
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.datum import datum_mark
-from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, thread_mesh
+from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, part_chord_tolerance, thread_mesh
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
 
@@ -28,7 +28,8 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
                profiles: ThreadProfiles | None = None,
                screw_profile: ThreadProfile | None = None) -> ThreadMesh:
     """Mesh of one part in its own frame, with its angular datum mark cut into face A
-    (the end face at the part's lower z, :mod:`prs_geom.geometry.datum`).
+    (the end face at the part's lower z, :mod:`prs_geom.geometry.datum`), at ``tol`` or
+    finer for a small part (:func:`~prs_geom.mesh.thread.part_chord_tolerance`).
 
     ``screw_profile`` replaces the design's screw profile (e.g. with the corrected pitch
     diameter of the contact analysis).
@@ -41,12 +42,13 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
     if part == "screw":
         lo, hi = screw_z_range(design)
         profile = screw_profile or prof.screw
-        tm = thread_mesh(profile, lo, hi, tol, first_mid, warps["screw"])
+        tm = thread_mesh(profile, lo, hi, part_chord_tolerance(profile, tol), first_mid, warps["screw"])
     elif part == "roller":
-        tm = thread_mesh(prof.roller, 0.0, thread_length(design), tol, first_mid, warps["roller"])
+        tm = thread_mesh(prof.roller, 0.0, thread_length(design), part_chord_tolerance(prof.roller, tol),
+                         first_mid, warps["roller"])
     elif part == "nut":
-        tm = thread_mesh(prof.nut, 0.0, thread_length(design), tol, first_mid, warps["nut"],
-                         body_radius=0.5 * design.nut.outer_diameter_mm)
+        tm = thread_mesh(prof.nut, 0.0, thread_length(design), part_chord_tolerance(prof.nut, tol), first_mid,
+                         warps["nut"], body_radius=0.5 * design.nut.outer_diameter_mm)
     else:
         raise ValueError(f"unknown part {part!r}")
     return cut_datum_mark(tm, datum_mark(tm.profile, tm.z_lo, tm.body_radius))
@@ -92,7 +94,8 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
     Vg, Fg = gear_mesh(pair.pinion, -w - 1.0, L + w + 1.0, gear_tol, phase_rad=offset)
     prism = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(Vg), np.ascontiguousarray(Fg, dtype=np.uint64)))
     for name, (z0, z1) in (("roller_lo", (-w, 0.0)), ("roller_hi", (L, L + w))):
-        tm = thread_mesh(prof.roller, z0, z1, tol, FIRST_MID_PITCHES["roller"] * p, warp)
+        tm = thread_mesh(prof.roller, z0, z1, part_chord_tolerance(prof.roller, tol),
+                         FIRST_MID_PITCHES["roller"] * p, warp)
         thread = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(tm.vertices),
                                                        np.ascontiguousarray(tm.faces, dtype=np.uint64)))
         m = (thread ^ prism).to_mesh64()

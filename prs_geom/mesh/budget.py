@@ -111,7 +111,7 @@ def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
     """Estimated triangles of the screw, roller and nut meshes at chord tolerance ``tol`` (mm),
     as floats (a length of 1e300 mm gives an estimate, not an overflow)."""
     from prs_geom.geometry.frames import thread_length
-    from prs_geom.mesh.thread import choose_tessellation
+    from prs_geom.mesh.thread import choose_tessellation, part_chord_tolerance
     from prs_geom.geometry.profiles import ThreadProfiles
 
     prof = ThreadProfiles.from_design(design)
@@ -119,14 +119,15 @@ def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
     out = {}
     for name in ("screw", "roller", "nut"):
         p = getattr(prof, name)
-        tess = choose_tessellation(p, tol)
+        part_tol = part_chord_tolerance(p, tol)
+        tess = choose_tessellation(p, part_tol)
         strands = p.starts * (2 * len(tess.flank_radii) + 1)
         turns = lengths[name] / p.lead
         surface = 2.0 * strands * tess.columns_per_turn * turns
         ends = 4.0 * tess.columns_per_turn + 2.0 * strands   # two end fans/annuli
         if p.internal:  # body cylinder (two triangles a facet) and its share of the end annuli
             body = 0.5 * design.nut.outer_diameter_mm
-            ends += 4.0 * max(12.0, math.pi / _half_step(tol / body))
+            ends += 4.0 * max(12.0, math.pi / _half_step(part_tol / body))
         # the datum slot: its five faces and the re-triangulated face A around it (measured
         # 36 to 82 triangles on the default and test designs)
         out[name] = surface + ends + DATUM_SLOT_TRIANGLES[p.internal]

@@ -64,6 +64,19 @@ class Tessellation:
         return 2.0 * math.pi / self.columns_per_turn
 
 
+#: Relative volume accuracy the part meshes keep besides the chord tolerance. Inscribed chords
+#: of a thread of outer radius r take about tol / r of its volume away (measured at 0.01 mm:
+#: roller, r = 4.3 mm, 0.23 %; screw 0.06 %; nut 0.05 %), so a small part is meshed at
+#: ``VOLUME_ACCURACY * r`` when that is finer: its mesh volume stays within 0.1 % of the solid.
+VOLUME_ACCURACY = 8e-4
+
+
+def part_chord_tolerance(profile: ThreadProfile, tol: float) -> float:
+    """The chord tolerance (mm) a part is meshed at: ``tol``, or finer for a small part (see
+    :data:`VOLUME_ACCURACY`)."""
+    return min(tol, VOLUME_ACCURACY * profile.outer_radius)
+
+
 def choose_tessellation(profile: ThreadProfile, tol: float, body_radius: float | None = None) -> Tessellation:
     """Sampling that keeps every error term within its share of ``tol`` (mm)."""
     r_max = profile.outer_radius
