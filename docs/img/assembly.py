@@ -14,7 +14,7 @@ from pathlib import Path
 from PIL import Image
 
 from prs_geom.analysis.contact import analyse_contact
-from prs_geom.exports.html import _template, _fill, scene_payload, three_js
+from prs_geom.exports.html import fill_template, page_template, scene_payload, three_js
 from prs_geom.model.design import default_design
 
 WIDTH, HEIGHT = 900, 560
@@ -29,9 +29,9 @@ def main() -> None:
     body = ("<div id='errors'></div><canvas id='view' width='900' height='560'></canvas>"
             "<div id='viewinfo' style='display:none'></div>"
             "<input type='checkbox' id='cutaway' checked style='display:none'>")
-    page = _fill(_template("report.html"), {
+    page = fill_template(page_template("report.html"), {
         "title": "assembly", "css": "body{margin:0;background:#f4f6f8}", "body": body,
-        "scene": json.dumps(payload).replace("</", "<\\/"), "viewer": _template("viewer.js"),
+        "scene": json.dumps(payload).replace("</", "<\\/"), "viewer": page_template("viewer.js"),
         "importmap": three["importmap"], "three_version": three["version"],
         "three_licence": three["licence"].replace("--", "- -")})
     chromium = shutil.which("chromium") or shutil.which("chromium-browser")

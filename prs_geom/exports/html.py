@@ -117,17 +117,19 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> list[list[Any]]:
     return rows
 
 
-def _template(name: str) -> str:
-    """A page template shipped in ``prs_geom/exports/templates`` (package data)."""
+def page_template(name: str) -> str:
+    """A page template shipped in ``prs_geom/exports/templates`` (package data): the page
+    (``report.html``), its style sheet and the 3D viewer script; the harmonic report uses
+    them too."""
     return resources.files("prs_geom.exports").joinpath("templates", name).read_text(encoding="utf-8")
 
 
-def _fill(template: str, values: dict[str, str]) -> str:
+def fill_template(template: str, values: dict[str, str]) -> str:
     """Replace every ``{{name}}`` once (values are not scanned again)."""
     return re.sub(r"\{\{(\w+)\}\}", lambda m: values[m.group(1)], template)
 
 
-def _svg(text: str) -> str:
+def svg_element(text: str) -> str:
     """The ``<svg>`` element of an SVG file's text (without the XML prolog)."""
     return text[text.index("<svg"):]
 
@@ -230,7 +232,7 @@ def _rating_html(r: dict[str, Any], plots_svg: dict[str, str]) -> str:
         ["double nut preload (N)", dn["preload_n"]],
         ["double nut: preload lost at (N)", dn["lift_off_load_n"]]]))
     if "rating" in plots_svg:
-        out.append("<div class='plots'>" + _svg(plots_svg["rating"]) + "</div>")
+        out.append("<div class='plots'>" + svg_element(plots_svg["rating"]) + "</div>")
     return "".join(out)
 
 
@@ -264,7 +266,7 @@ def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
             [[r["term"], f"{r['share'] * 100:.1f} %", r["std_alone"]] for r in t["importance"]],
             ["error group", "share of the variance", "std of the worst LDC alone"]))
     if "tolerance_ldc" in svgs:
-        out.append("<div class='plots'>" + _svg(svgs["tolerance_ldc"]) + "</div>")
+        out.append("<div class='plots'>" + svg_element(svgs["tolerance_ldc"]) + "</div>")
     return "".join(out)
 
 
@@ -315,7 +317,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                              ["max LDC", L["max_ldc"]], ["max LDC, constant pitch", L["constant_pitch"]["max_ldc"]],
                              ["axial stiffness (N/um)", L["axial_stiffness_N_per_um"]]]))
         shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
-        parts.append("<div class='plots'>" + "".join(_svg(t) for t in shown) + "</div>")
+        parts.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")
     if rating is not None:
         parts.append(_rating_html(rating, plots_svg or {}))
     if tolerance is not None:
@@ -348,9 +350,9 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     payload = json.dumps(scene_payload(design, screw_profile=contact.screw_profile if contact else None)
                          ).replace("</", "<\\/")
     three = three_js()
-    page = _fill(_template("report.html"), {
-        "title": html.escape(design.name), "css": _template("report.css"), "body": "".join(parts),
-        "scene": payload, "viewer": _template("viewer.js"), "importmap": three["importmap"],
+    page = fill_template(page_template("report.html"), {
+        "title": html.escape(design.name), "css": page_template("report.css"), "body": "".join(parts),
+        "scene": payload, "viewer": page_template("viewer.js"), "importmap": three["importmap"],
         "three_version": three["version"], "three_licence": three["licence"].replace("--", "- -")})
     # the template file ends with a newline; the page has always ended at </html>
     path.write_text(page.rstrip("\n"), encoding="utf-8")

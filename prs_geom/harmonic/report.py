@@ -19,14 +19,12 @@ from __future__ import annotations
 import base64
 import html
 import json
-import re
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from prs_geom.exports.html import three_js
+from prs_geom.exports.html import fill_template, page_template, svg_element, three_js
 from prs_geom.harmonic.assembly import HarmonicAssembly
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.io import design_hash, design_to_dict
@@ -90,21 +88,6 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> list[list[Any]]:
         else:
             rows.append([key, v])
     return rows
-
-
-def _template(name: str) -> str:
-    """A page template of the PRS report (package data of prs_geom.exports), read-only."""
-    return resources.files("prs_geom.exports").joinpath("templates", name).read_text(encoding="utf-8")
-
-
-def _fill(template: str, values: dict[str, str]) -> str:
-    """Replace every ``{{name}}`` once (the values are not scanned again)."""
-    return re.sub(r"\{\{(\w+)\}\}", lambda m: values[m.group(1)], template)
-
-
-def _svg(text: str) -> str:
-    """The ``<svg>`` element of an SVG file's text (without the XML prolog)."""
-    return text[text.index("<svg"):]
 
 
 RATIO_COLUMNS = [("a_mm", "a (mm)"), ("beta_deg", "beta (deg)"), ("phi_deg", "phi (deg)"),
@@ -202,7 +185,7 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
         ["infinite-ratio position (mm)", rep["infinite_ratio_position_mm"]],
         ["ratio at positions.min_mm", rep["ratio_min"]], ["ratio at positions.max_mm", rep["ratio_max"]],
         ["speed range", rep["speed_range"]]], ["quantity", "value"], full=True, table_id="speed-range"))
-    parts.append("<div class='plots'>" + _svg(ratio_svg) + "</div>")
+    parts.append("<div class='plots'>" + svg_element(ratio_svg) + "</div>")
     parts.append("<h3>Ratio table</h3>" + _table([[row[k] for k, _ in RATIO_COLUMNS] for row in rep["table"]],
                                                  [h for _, h in RATIO_COLUMNS], full=True, table_id="ratio-table"))
     parts.append("<h2 id='tolerance'>Tolerance</h2><p class='note'>Radius error e that keeps the ratio within the "
@@ -222,8 +205,8 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
                  f"(docs/theory/harmonic.md).</p>")
     payload = json.dumps(scene_payload(view, colours)).replace("</", "<\\/")
     three = three_js()
-    page = _fill(_template("report.html"), {
-        "title": html.escape(design.name), "css": _template("report.css"), "body": "".join(parts),
-        "scene": payload, "viewer": _template("viewer.js"), "importmap": three["importmap"],
+    page = fill_template(page_template("report.html"), {
+        "title": html.escape(design.name), "css": page_template("report.css"), "body": "".join(parts),
+        "scene": payload, "viewer": page_template("viewer.js"), "importmap": three["importmap"],
         "three_version": three["version"], "three_licence": three["licence"].replace("--", "- -")})
     path.write_text(page.rstrip("\n"), encoding="utf-8")
