@@ -73,7 +73,7 @@ INVALID = {
     "nut.major_diameter_mm": non_positive,
     "nut.minor_diameter_mm": non_positive,
     "nut.pitch_list_mm": bad_pitch_list(),
-    **{f"materials.{part}.youngs_modulus_mpa": non_positive for part in ("screw", "roller", "nut")},
+    **{f"materials.{part}.youngs_modulus_mpa": out_of(1e3, 1e7) for part in ("screw", "roller", "nut")},
     **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.5, hi_open=True) for part in ("screw", "roller", "nut")},
     "loading.axial_load_n": non_positive,
     "loading.installation": bad_choice(("tension-compression", "compression-compression")),

@@ -183,7 +183,13 @@ class Material:
     thermal_expansion_per_k: float = 11.5e-6
 
     def __post_init__(self) -> None:
-        _set(self, "youngs_modulus_mpa", positive("youngs_modulus_mpa", self.youngs_modulus_mpa))
+        e = positive("youngs_modulus_mpa", self.youngs_modulus_mpa)
+        # engineering solids span about 1 GPa (polymers) to 1.2 TPa (diamond); far outside,
+        # the tooth compliances vanish or explode and the load system loses its conditioning
+        if not 1e3 <= e <= 1e7:
+            raise DesignError("youngs_modulus_mpa", self.youngs_modulus_mpa,
+                              "must be from 1e3 to 1e7 MPa (1 GPa to 10 TPa)")
+        _set(self, "youngs_modulus_mpa", e)
         nu = real("poisson_ratio", self.poisson_ratio)
         if not 0.0 <= nu < 0.5:
             raise DesignError("poisson_ratio", self.poisson_ratio, "must be in [0, 0.5)")
