@@ -57,3 +57,32 @@ def read_3mf(path: Path) -> dict:
         item_object[b.GetPartNumber()] = b.GetObjectResource().GetName()
     return {"unit": model.GetUnit(), "mm": lib3mf.ModelUnit.MilliMeter, "objects": objects, "items": items,
             "item_object": item_object}
+
+
+def khronos_issues(glb: Path, tmp_path: Path) -> dict:
+    """The Khronos glTF validator's ``issues`` for a GLB file (npm ``gltf-validator`` on node,
+    at ``PRS_GLTF_VALIDATOR`` or ``.ci/node``). Skips the test where node or the validator is
+    missing, except in CI, which installs both (.ci/run)."""
+    import json
+    import os
+    import shutil
+    import subprocess
+
+    import pytest
+
+    node = shutil.which("node")
+    validator = Path(os.environ.get("PRS_GLTF_VALIDATOR", Path(__file__).resolve().parent.parent / ".ci" / "node"
+                                    / "node_modules" / "gltf-validator"))
+    if node is None or not (validator / "package.json").exists():
+        if os.environ.get("CI"):
+            raise RuntimeError(f"CI must install node and gltf-validator at {validator} (see .ci/run)")
+        pytest.skip(f"node or gltf-validator not installed at {validator} "
+                    "(npm install --prefix .ci/node gltf-validator)")
+    script = tmp_path / "validate.js"
+    script.write_text(
+        "const v = require(process.argv[2]); const fs = require('fs');\n"
+        "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[3]))).then(r => {\n"
+        "  console.log(JSON.stringify(r.issues)); }).catch(e => { console.error(e); process.exit(3); });\n")
+    r = subprocess.run([node, str(script), str(validator), str(glb)], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout)

@@ -129,6 +129,23 @@ def fill_template(template: str, values: dict[str, str]) -> str:
     return re.sub(r"\{\{(\w+)\}\}", lambda m: values[m.group(1)], template)
 
 
+def page_head(title: str, version: str, date: str, design_sha: str, conventions: str, warnings: list[str],
+              cut_label: str) -> list[str]:
+    """The opening of a report page (both product lines): title, provenance (version, date,
+    design hash, ``conventions``), the warnings, the script-error box and the 3D view with
+    its cut-open checkbox labelled ``cut_label`` (the element ids viewer.js expects).
+    ``title``, ``conventions`` and ``cut_label`` are HTML (callers escape what a user wrote)."""
+    return [f"<h1>{title}</h1>",
+            f"<p class='note' id='provenance'>prs_geom {html.escape(version)}; {html.escape(date)}; "
+            f"design sha256 {design_sha}. {conventions}</p>",
+            "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
+            + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
+            if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
+            "<div id='errors'></div>",
+            "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas><div id='viewinfo' class='note'></div>"
+            f"<label class='note'><input type='checkbox' id='cutaway' checked> {cut_label}</label>"]
+
+
 def svg_element(text: str) -> str:
     """The ``<svg>`` element of an SVG file's text (without the XML prolog)."""
     return text[text.index("<svg"):]
@@ -283,15 +300,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     rendered them; the page shows them inline. Templates, style sheet and viewer script are
     package data (``templates/report.html``, ``report.css``, ``viewer.js``).
     """
-    parts = [f"<h1>Planetary roller screw '{html.escape(design.name)}'</h1>",
-             f"<p class='note' id='provenance'>prs_geom {html.escape(version)}; {html.escape(date)}; "
-             f"design sha256 {design_hash(design)}. Units mm, N, MPa; tooth 1 at the loaded end.</p>",
-             "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
-             + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
-             if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
-             "<div id='errors'></div>",
-             "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas><div id='viewinfo' class='note'></div>"
-             "<label class='note'><input type='checkbox' id='cutaway' checked> cut the nut open</label>"]
+    parts = page_head(f"Planetary roller screw '{html.escape(design.name)}'", version, date, design_hash(design),
+                      "Units mm, N, MPa; tooth 1 at the loaded end.", warnings, "cut the nut open")
     if contact is not None:
         c = contact.report()
         sr = c["screw_roller"]

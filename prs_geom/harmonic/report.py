@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from prs_geom.exports.html import fill_template, page_template, svg_element, three_js
+from prs_geom.exports.html import fill_template, page_head, page_template, svg_element, three_js
 from prs_geom.harmonic.assembly import HarmonicAssembly
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.io import design_hash, design_to_dict
@@ -154,18 +154,9 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
     rep = report["harmonic"]
     asm = report.get("assembly") or {}
     warnings = report.get("warnings") or []
-    parts = [f"<h1>Harmonic friction drive '{html.escape(design.name)}'</h1>",
-             f"<p class='note' id='provenance'>prs_geom {html.escape(version)}; {html.escape(date)}; design "
-             f"sha256 {design_hash(design)}. Units mm, degrees; axial positions from the flexspline bottom; "
-             f"x along the wave generator's major axis.</p>",
-             "<div id='warnings' class='warnings'><b>Warnings</b><ul>"
-             + "".join(f"<li>{html.escape(w)}</li>" for w in warnings) + "</ul></div>"
-             if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
-             "<div id='errors'></div>",
-             "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas>"
-             "<div id='viewinfo' class='note'></div>"
-             "<label class='note'><input type='checkbox' id='cutaway' checked> cut the circular spline and the "
-             "flexspline open</label>"]
+    parts = page_head(f"Harmonic friction drive '{html.escape(design.name)}'", version, date, design_hash(design),
+                      "Units mm, degrees; axial positions from the flexspline bottom; x along the wave "
+                      "generator's major axis.", warnings, "cut the circular spline and the flexspline open")
     if asm:
         wg = asm["wave_generator"]
         parts.append(_table([
