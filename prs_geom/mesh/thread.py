@@ -1,7 +1,7 @@
 """Watertight triangle meshes of threaded parts, built from the analytic surfaces.
 
-Construction (no Python loop over vertices or faces; loops run over the few dozen
-profile strands only):
+Construction (vectorised: no Python loop over vertices, faces, strands, teeth or turns;
+the work per vertex and per triangle is a few numpy passes, see :func:`thread_mesh`):
 
 * The thread surface is swept by *strands*: helices through fixed profile points (groove
   centre, root and crest corners, flank samples) of every start. Adjacent strands bound a
@@ -133,52 +133,52 @@ class ThreadMesh:
 
 
 # --------------------------------------------------------------------------- merging
+def _merge_flat(A: NDArray[np.int64], ta: NDArray, na: NDArray[np.int64], B: NDArray[np.int64],
+                tb: NDArray, nb: NDArray[np.int64]) -> NDArray[np.int64]:
+    """:func:`merge_strips` on chains given concatenated, strip after strip, with the chain
+    lengths ``na`` and ``nb`` per strip (a strip may have empty chains: no triangles)."""
+    na, nb = np.asarray(na, np.int64), np.asarray(nb, np.int64)
+    n_strips, n_a = len(na), len(A)
+    a0, b0 = np.cumsum(na) - na, np.cumsum(nb) - nb
+    ev_a, ev_b = np.maximum(na - 1, 0), np.maximum(nb - 1, 0)   # events: vertices after the first
+    first = np.ones(len(A), bool)
+    first[a0[na > 0]] = False
+    ia = np.flatnonzero(first)
+    first = np.ones(len(B), bool)
+    first[b0[nb > 0]] = False
+    ib = np.flatnonzero(first)
+    strips = np.arange(n_strips)
+    ev_strip = np.concatenate([np.repeat(strips, ev_a), np.repeat(strips, ev_b)])
+    ev_theta = np.concatenate([ta[ia], tb[ib]])
+    is_b = np.arange(len(ev_strip)) >= len(ia)
+    # merged order: by strip, theta, A before B, chain order
+    order = np.lexsort((is_b, ev_theta, ev_strip))
+    s = ev_strip[order]
+    is_b = is_b[order]
+    g = np.concatenate([ia, ib])[order]                      # the event's index in A or B
+    b_before = np.cumsum(is_b) - is_b - (np.cumsum(ev_b) - ev_b)[s]   # B events before, in the strip
+    a_before = np.arange(len(s)) - (np.cumsum(ev_a + ev_b) - ev_a - ev_b)[s] - b_before
+    # A event (chain index i): (A[i-1], A[i], current B); B event j: (current A, B[j], B[j-1])
+    idx = np.empty((len(s), 3), np.int64)
+    idx[:, 0] = np.where(is_b, a0[s] + a_before, g - 1)
+    idx[:, 1] = np.where(is_b, n_a + g, g)
+    idx[:, 2] = np.where(is_b, n_a + g - 1, n_a + b0[s] + b_before)
+    return np.concatenate([A, B])[idx]
+
+
 def merge_strips(a_ids: list[NDArray], a_th: list[NDArray], b_ids: list[NDArray],
                  b_th: list[NDArray]) -> NDArray[np.int64]:
     """Triangulate strips between chain pairs (A lower, B upper), both sorted by theta.
 
     For every strip the triangles are counter-clockwise in the (theta, u) plane with A
     below B; the strip starts at rung (A[0], B[0]) and ends at rung (A[-1], B[-1]).
-    Vectorised over all strips at once.
+    Events (chain vertices after the first) are taken in increasing theta, A before B
+    at equal theta. Vectorised over all strips at once.
     """
     na = np.array([len(x) for x in a_ids])
     nb = np.array([len(x) for x in b_ids])
-    A = np.concatenate(a_ids)
-    B = np.concatenate(b_ids)
-    a0 = np.concatenate([[0], np.cumsum(na)[:-1]])
-    b0 = np.concatenate([[0], np.cumsum(nb)[:-1]])
-    strip_a = np.repeat(np.arange(len(na)), na)
-    strip_b = np.repeat(np.arange(len(nb)), nb)
-    ka = np.arange(len(A)) - a0[strip_a]
-    kb = np.arange(len(B)) - b0[strip_b]
-    ta, tb = np.concatenate(a_th), np.concatenate(b_th)
-    ea, eb = ka >= 1, kb >= 1
-    ev_strip = np.concatenate([strip_a[ea], strip_b[eb]])
-    ev_theta = np.concatenate([ta[ea], tb[eb]])
-    ev_isb = np.concatenate([np.zeros(ea.sum(), np.int64), np.ones(eb.sum(), np.int64)])
-    ev_k = np.concatenate([ka[ea], kb[eb]])
-    order = np.lexsort((ev_isb, ev_theta, ev_strip))
-    ev_strip, ev_isb, ev_k = ev_strip[order], ev_isb[order], ev_k[order]
-    # A and B events seen so far in the strip, this one excluded
-    cum_b = np.cumsum(ev_isb) - ev_isb
-    cum_a = np.cumsum(1 - ev_isb) - (1 - ev_isb)
-    first = np.concatenate([[True], ev_strip[1:] != ev_strip[:-1]])
-    start_idx = np.maximum.accumulate(np.where(first, np.arange(len(ev_strip)), 0))
-    nb_before = cum_b - cum_b[start_idx]
-    na_before = cum_a - cum_a[start_idx]
-    sa, sb = a0[ev_strip], b0[ev_strip]
-    is_a = ev_isb == 0
-    i_a = np.where(is_a, ev_k, na_before)       # current A index after the event
-    j_b = np.where(is_a, nb_before, ev_k)       # current B index after the event
-    tri = np.empty((len(ev_strip), 3), np.int64)
-    tri[is_a, 0] = A[sa[is_a] + i_a[is_a] - 1]
-    tri[is_a, 1] = A[sa[is_a] + i_a[is_a]]
-    tri[is_a, 2] = B[sb[is_a] + j_b[is_a]]
-    ib = ~is_a
-    tri[ib, 0] = A[sa[ib] + i_a[ib]]
-    tri[ib, 1] = B[sb[ib] + j_b[ib]]
-    tri[ib, 2] = B[sb[ib] + j_b[ib] - 1]
-    return tri
+    return _merge_flat(np.concatenate(a_ids), np.concatenate(a_th), na,
+                       np.concatenate(b_ids), np.concatenate(b_th), nb)
 
 
 def _ranges(starts: NDArray[np.int64], counts: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
@@ -187,6 +187,19 @@ def _ranges(starts: NDArray[np.int64], counts: NDArray[np.int64]) -> tuple[NDArr
     owner = np.repeat(np.arange(len(starts)), counts)
     offs = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
     return starts[owner] + offs, owner
+
+
+def _runs(starts: NDArray[np.int64], counts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Concatenated aranges starting at ``starts`` (counts >= 0): a running sum of ones with
+    a jump at every run start, in one array."""
+    live = counts > 0
+    s, c = starts[live], counts[live]
+    out = np.ones(int(c.sum()), np.int64)
+    if len(out):
+        out[0] = s[0]
+        out[(np.cumsum(c) - c)[1:]] = s[1:] - s[:-1] - c[:-1] + 1
+        np.cumsum(out, out=out)
+    return out
 
 
 def _open_columns(lo: NDArray, hi: NDArray, dth: float) -> tuple[NDArray, NDArray]:
@@ -214,8 +227,8 @@ def _ring_angles(th_poly: NDArray, r_poly: NDArray, step_max: float) -> NDArray:
     n_o = max(12, int(math.ceil(two_pi * (1.0 + COLUMN_MARGIN) / step_max)))
     step = two_pi / n_o
     eps = 1e-9 * float(np.max(r_poly))
-    falls = np.roll(r_poly, -1) < r_poly - eps          # the polygon is closed: one turn
-    tops = falls & ~np.roll(falls, 1)
+    falls = _rolled(r_poly, 1) < r_poly - eps           # the polygon is closed: one turn
+    tops = falls & ~_rolled(falls, -1)
     t = np.sort(np.mod(th_poly[tops], two_pi))
     uni = step * np.arange(n_o)
     if len(t) == 0:
@@ -224,6 +237,47 @@ def _ring_angles(th_poly: NDArray, r_poly: NDArray, step_max: float) -> NDArray:
     gap = np.minimum(np.abs((uni - t[k] + math.pi) % two_pi - math.pi),
                      np.abs((uni - t[k - 1] + math.pi) % two_pi - math.pi))
     return np.sort(np.concatenate([t, uni[gap > COLUMN_MARGIN * step]]))
+
+
+def _rolled(x: NDArray, k: int) -> NDArray:
+    """``np.roll(x, -k)``: element i is x[i + k], cyclically (a cheaper call)."""
+    return np.concatenate([x[k:], x[:k]])
+
+
+def _xyz(r: NDArray, th: NDArray, z) -> NDArray:
+    return np.column_stack([r * np.cos(th), r * np.sin(th), np.broadcast_to(z, np.shape(th))])
+
+
+def _closed(ids: NDArray, th: NDArray) -> tuple[NDArray, NDArray]:
+    """A closed chain over one turn: its first vertex again at the end, one turn on."""
+    return np.concatenate([ids, ids[:1]]), np.concatenate([th, th[:1] + 2.0 * math.pi])
+
+
+def _body_rings(polys: dict, P_lo: NDArray, P_hi: NDArray, nv: int, body_radius: float, tol: float,
+                z_lo: float, z_hi: float) -> tuple[NDArray, list]:
+    """The nut's body circles at z_lo and z_hi (vertex ids from ``nv`` on) and the merge strips
+    (A ids, A theta, B ids, B theta) of the two end annuli (end polygon below, circle above:
+    normals -z) and of the body cylinder between the circles. ``P_lo``, ``P_hi``: the
+    end polygons' vertices (right-hand frame)."""
+    two_pi = 2.0 * math.pi
+    # body polygon: no step wider than step_max, whose sagitta is tol
+    step_max = 2.0 * math.acos(1.0 - tol / body_radius)
+    strips, rings = [], []
+    for (P, th), Pv in zip(polys.values(), (P_lo, P_hi)):
+        ang = _ring_angles(th, np.hypot(Pv[:, 0], Pv[:, 1]), step_max)
+        rids = nv + np.arange(len(ang))
+        nv += len(ang)
+        rings.append((rids, ang))
+        rel = (ang - th[0]) % two_pi            # circle vertices from the polygon start on
+        order = np.argsort(rel, kind="stable")
+        strips.append((*_closed(P, th), *_closed(rids[order], th[0] + rel[order])))
+    # body cylinder between the two circles (their angles differ where the tops of the
+    # falls were added); every triangle spans at most one circle step
+    (lo_ids, lo_ang), (hi_ids, hi_ang) = rings
+    strips.append((*_closed(lo_ids, lo_ang), *_closed(hi_ids, hi_ang)))
+    ang = np.concatenate([lo_ang, hi_ang])
+    circles = _xyz(body_radius, ang, np.repeat([z_lo, z_hi], [len(lo_ang), len(hi_ang)]))
+    return circles, strips
 
 
 # --------------------------------------------------------------------------- builder
@@ -251,7 +305,29 @@ def thread_mesh(profile: ThreadProfile, z_lo: float, z_hi: float, tol: float,
     -------
     ThreadMesh
         Closed, consistently wound (outward normals) triangle mesh.
-    """
+
+    Notes
+    -----
+    Vectorised over strands, teeth and turns (no Python loop over any of them): the bulk is
+    a few numpy passes over the strand column vertices and over the band triangles, and
+    the arrays are bit for bit those of merging every band's full chains.
+
+    * Strand column vertices: the cosine, sine and helix advance of a column depend on its
+      index only, so they are evaluated once per column (tables over the column range) and
+      gathered per strand; every value is the float64 result of the same operations as
+      evaluating it per vertex (theta = column * dtheta).
+    * Band triangles: band g merges chain A (strand h's end point at z_lo, the end curve at
+      z_lo, strand g's end point, its columns, its end point at z_hi) with chain B (strand
+      h = g + 1's columns, its end point at z_hi, the end curve at z_hi) in theta, A first
+      at equal theta. Within each chain the events (vertices after the first) increase in
+      theta: the columns keep the sliver margin from the end points of their own strand
+      and end curve. So where both strands have columns k - 1 .. K1 (the middle, from
+      K0 = max(first columns) + 1), the merge takes A_k, B_k, A_k+1, ... (equal thetas
+      k * dtheta, A first) and emits the quads (a_k-1, a_k, b_k, b_k-1) as two triangles
+      each: written arithmetically (:func:`_band_rows`). The chain pieces before and after
+      the middle (about one turn of columns over all bands, next to the end planes) are
+      merged in one vectorised call.
+        """
     warp = warp or identity_warp(profile.pitch)
     if profile.internal and body_radius is None:
         raise ValueError("an internal thread needs body_radius")
@@ -263,142 +339,247 @@ def thread_mesh(profile: ThreadProfile, z_lo: float, z_hi: float, tol: float,
     M = len(u_s)
     G = profile.starts * M
     g = np.arange(G)
-    k_g = g // M
-    u_g = u_s[g % M]
-    r_g = r_s[g % M]
-    base_g = first_mid + k_g * p   # helix coordinate of strand g's tooth at theta = 0
+    strand_point = g % M
+    u_g, r_g = u_s[strand_point], r_s[strand_point]
+    base_g = first_mid + (g // M) * p   # helix coordinate of strand g's tooth at theta = 0
 
-    def theta_at(z_e: float, idx=g) -> NDArray:
-        m = warp.inverse(z_e - u_g[idx])
-        return 2.0 * math.pi * (m - base_g[idx]) / L
+    def theta_at(z_e: float) -> NDArray:
+        m = warp.inverse(z_e - u_g)
+        return 2.0 * math.pi * (m - base_g) / L
 
     th_lo, th_hi = theta_at(z_lo), theta_at(z_hi)
-    c0, c1 = _open_columns(th_lo, th_hi, dth)
-
-    def xyz(r: NDArray, th: NDArray, z: NDArray) -> NDArray:
-        return np.column_stack([r * np.cos(th), r * np.sin(th), z])
-
-    # --- strand column vertices
-    cols, owner = _ranges(c0, c1 - c0 + 1)
-    th_c = cols * dth
-    z_c = warp(base_g[owner] + L * th_c / (2 * math.pi)) + u_g[owner]
-    verts = [xyz(r_g[owner], th_c, z_c)]
-    n_strand_cols = c1 - c0 + 1
-    strand_base = np.concatenate([[0], np.cumsum(n_strand_cols)[:-1]])
-    nv = len(cols)
-    # --- strand end vertices
-    e_lo = nv + g
-    e_hi = nv + G + g
-    verts.append(xyz(r_g, th_lo, np.full(G, z_lo)))
-    verts.append(xyz(r_g, th_hi, np.full(G, z_hi)))
-    nv += 2 * G
-
-    # --- bands (g, h): h = g + 1, the last band wraps to strand 0 one turn on
-    h = (g + 1) % G
-    wrap = np.where(g == G - 1, -2.0 * math.pi, 0.0)  # theta offset of strand h in band param
-    colshift = np.where(g == G - 1, -ncol, 0)
+    # bands (g, h): h = g + 1, the last band wraps to strand 0 one turn on
+    h = _rolled(g, 1)
+    wrap = np.zeros(G)
+    wrap[-1] = -2.0 * math.pi                       # theta offset of strand h in band param
     th_lo_h, th_hi_h = th_lo[h] + wrap, th_hi[h] + wrap
+    # columns strictly inside: each strand's theta range, then each band's end curve at z_lo
+    # and at z_hi (end e: band e % G, from strand h's end point to strand g's)
+    th_from, th_to = np.concatenate([th_lo_h, th_hi_h]), np.concatenate([th_lo, th_hi])
+    first_col, last_col = _open_columns(np.concatenate([th_lo, th_from]), np.concatenate([th_hi, th_to]), dth)
+    c0, c1 = first_col[:G], last_col[:G]
+    n_strand_cols = c1 - c0 + 1
+    n_g = np.maximum(n_strand_cols, 0)
+    strand_base = np.cumsum(n_strand_cols) - n_strand_cols   # id of strand g's first column vertex
+    nv_cols = int(n_g.sum())
+    b0 = first_col[G:]
+    n_end = np.maximum(last_col[G:] - b0 + 1, 0)
+    end_split = np.cumsum(n_end) - n_end
 
-    end_ids: dict[str, NDArray] = {}
-    end_th: dict[str, NDArray] = {}
-    end_owner: dict[str, NDArray] = {}
-    for name, z_e, lo_b, hi_b in (("lo", z_lo, th_lo_h, th_lo), ("hi", z_hi, th_hi_h, th_hi)):
-        b0, b1 = _open_columns(lo_b, hi_b, dth)
-        ecol, eown = _ranges(b0, b1 - b0 + 1)
-        eth = ecol * dth
-        m = base_g[eown] + L * eth / (2 * math.pi)
-        u_star = z_e - warp(m)
-        verts.append(xyz(profile.radius_at_offset(u_star), eth, np.full(len(ecol), z_e)))
-        end_ids[name] = nv + np.arange(len(ecol))
-        end_th[name] = eth
-        end_owner[name] = eown
-        nv += len(ecol)
-    vertices = np.concatenate(verts)
+    # --- small vertex sets (right-hand frame), after the strand columns: the strand end
+    # points at z_lo (ids e_lo), at z_hi (e_hi), then the end curves at z_lo, then at z_hi
+    e_lo, e_hi = nv_cols + g, nv_cols + G + g
+    ecol = _runs(b0, n_end)
+    eth = ecol * dth
+    m = np.repeat(np.concatenate([base_g, base_g]), n_end) + L * eth / (2 * math.pi)
+    n_lo = int(end_split[G])                        # end-curve vertices at z_lo
+    z_small = np.repeat([z_lo, z_hi, z_lo, z_hi], [G, G, n_lo, len(ecol) - n_lo])
+    u_star = z_small[2 * G:] - warp(m)
+    V_small = _xyz(np.concatenate([r_g, r_g, profile.radius_at_offset(u_star)]),
+                   np.concatenate([th_lo, th_hi, eth]), z_small)
+    end_id0 = nv_cols + 2 * G + end_split          # first vertex id of each end curve
+    nv = nv_cols + len(V_small)
 
-    # --- chains per band (loop over strands only)
-    split = {n: np.searchsorted(end_owner[n], np.arange(G + 1)) for n in end_ids}
-    A_ids, A_th, B_ids, B_th = [], [], [], []
-    for gi in range(G):
-        hi_ = h[gi]
-        lo_sl = slice(split["lo"][gi], split["lo"][gi + 1])
-        hi_sl = slice(split["hi"][gi], split["hi"][gi + 1])
-        gcols = strand_base[gi] + np.arange(n_strand_cols[gi])
-        hcols = strand_base[hi_] + np.arange(n_strand_cols[hi_])
-        A_ids.append(np.concatenate([[e_lo[hi_]], end_ids["lo"][lo_sl], [e_lo[gi]], gcols, [e_hi[gi]]]))
-        A_th.append(np.concatenate([[th_lo_h[gi]], end_th["lo"][lo_sl], [th_lo[gi]],
-                                    np.arange(c0[gi], c1[gi] + 1) * dth, [th_hi[gi]]]))
-        B_ids.append(np.concatenate([hcols, [e_hi[hi_]], end_ids["hi"][hi_sl]]))
-        B_th.append(np.concatenate([(np.arange(c0[hi_], c1[hi_] + 1) + colshift[gi]) * dth,
-                                    [th_hi_h[gi]], end_th["hi"][hi_sl]]))
-    faces_thread = merge_strips(A_ids, A_th, B_ids, B_th)
+    # --- end polygons, theta increasing over exactly one turn: bands in decreasing g, each
+    # strand h's end point then the band's end curve; the lower polygon, then the upper
+    seq = np.concatenate([g[::-1], G + g[::-1]])
+    cnt = n_end[seq]
+    at = np.cumsum(cnt + 1) - cnt - 1
+    rest = _runs(at + 1, cnt)
+    idx = _runs(end_split[seq], cnt)
+    poly_ids = np.empty(len(idx) + 2 * G, np.int64)
+    poly_th = np.empty(len(idx) + 2 * G)
+    poly_ids[at] = nv_cols + (seq >= G) * G + h[seq % G]
+    poly_th[at] = th_from[seq]
+    poly_ids[rest] = nv_cols + 2 * G + idx
+    poly_th[rest] = eth[idx]
+    n_lo += G
+    polys = {"lo": (poly_ids[:n_lo], poly_th[:n_lo]), "hi": (poly_ids[n_lo:], poly_th[n_lo:])}
 
-    # --- end polygons, theta increasing over exactly one turn: bands in decreasing g
-    polys = {}
-    for name, e in (("lo", e_lo), ("hi", e_hi)):
-        sl = split[name]
-        ids, ths = [], []
-        th_e = th_lo if name == "lo" else th_hi
-        for gi in range(G - 1, -1, -1):
-            hi_ = h[gi]
-            ids.append(np.concatenate([[e[hi_]], end_ids[name][sl[gi]:sl[gi + 1]]]))
-            ths.append(np.concatenate([[th_e[hi_] + wrap[gi]], end_th[name][sl[gi]:sl[gi + 1]]]))
-        polys[name] = (np.concatenate(ids), np.concatenate(ths))
+    # --- band chains and their regular middles (see Notes)
+    nlo = n_end[:G]
+    nh = n_g[h]
+    nA = nlo + n_g + 3
+    nB = nh + 1 + n_end[G:]
+    c0h, c1h = c0[h], c1[h]                          # strand h's columns in band param
+    c0h[-1] -= ncol
+    c1h[-1] -= ncol
+    K0 = np.maximum(c0, c0h) + 1                     # middle: columns K0 .. K1
+    K1 = np.minimum(c1, c1h)
+    nreg = np.maximum(K1 - K0 + 1, 0)
+    has = nreg > 0
+    # chain indices of column K0 - 1 (A: after e_lo[h], the end curve and e_lo[g]; B: first),
+    # the state before the middle, and of K1 after it; no middle: the whole chains merge
+    ia0 = np.where(has, nlo + 2 + (K0 - 1 - c0), nA - 1)
+    ib0 = np.where(has, K0 - 1 - c0h, nB - 1)
+    ia1, ib1 = ia0 + nreg, ib0 + nreg
+    n_tri = nA + nB - 2
+    row0 = np.cumsum(n_tri) - n_tri
+    n_pre = ia0 + ib0
+    n_suf = n_tri - n_pre - 2 * nreg
+    T = int(n_tri.sum())
 
-    face_lists = [faces_thread]
-    kinds = [np.full(len(faces_thread), FACE_THREAD, np.int8)]
+    # the pieces before and after the middles: strips 2 g (chain prefixes), 2 g + 1 (suffixes)
+    la = np.column_stack([ia0 + 1, np.where(has, nA - ia1, 0)]).ravel()
+    lb = np.column_stack([ib0 + 1, np.where(has, nB - ib1, 0)]).ravel()
+    zero = np.zeros(G, np.int64)
+    i, own = _ranges(np.column_stack([zero, ia1]).ravel(), la)
+    bd = own >> 1
+    lo_n = nlo[bd]
+    # chain A: e_lo[h] | lower end curve | e_lo[g] | strand g's columns | e_hi[g]
+    seg = (i > 0).astype(np.int64) + (i > lo_n) + (i > lo_n + 1) + (i > lo_n + 1 + n_g[bd])
+    key = seg * G + bd
+    A_ids = np.concatenate([e_lo[h], end_id0[:G] - 1, e_lo, strand_base - nlo - 2, e_hi])[key]
+    A_col = np.concatenate([zero, b0[:G] - 1, zero, c0 - nlo - 2, zero])[key] + i
+    ranged = (seg == 1) | (seg == 3)
+    A_ids[ranged] += i[ranged]
+    A_th = np.where(ranged, A_col * dth, np.concatenate([th_lo_h, th_lo, th_lo, th_lo, th_hi])[key])
+    # chain B: strand h's columns | e_hi[h] | upper end curve
+    j, own = _ranges(np.column_stack([zero, ib1]).ravel(), lb)
+    bd = own >> 1
+    nh_j = nh[bd]
+    seg = (j >= nh_j).astype(np.int64) + (j > nh_j)
+    key = seg * G + bd
+    B_ids = np.concatenate([strand_base[h], e_hi[h], end_id0[G:] - nh - 1])[key]
+    B_col = np.concatenate([c0h, zero, b0[G:] - nh - 1])[key] + j
+    ranged = seg != 1
+    B_ids[ranged] += j[ranged]
+    B_th = np.where(ranged, B_col * dth, th_hi_h[bd])
+    irr_rows = _runs(np.column_stack([row0, row0 + n_pre + 2 * nreg]).ravel(),
+                     np.column_stack([n_pre, n_suf]).ravel())
+
+    # --- end faces (right-hand orientation): fans from the axis, or (nut) annuli to the body
+    # circles and the body cylinder, merged with the band pieces above in one call
     if not profile.internal:
-        centre_lo, centre_hi = len(vertices), len(vertices) + 1
-        vertices = np.concatenate([vertices, [[0.0, 0.0, z_lo], [0.0, 0.0, z_hi]]])
-        for name, centre, kind in (("lo", centre_lo, FACE_END_LO), ("hi", centre_hi, FACE_END_HI)):
-            P = polys[name][0]
-            Pn = np.roll(P, -1)
-            fan = np.column_stack([np.full(len(P), centre), P, Pn])
-            if name == "lo":
-                fan = fan[:, [0, 2, 1]]
-            face_lists.append(fan)
-            kinds.append(np.full(len(fan), kind, np.int8))
+        extra = np.array([[0.0, 0.0, z_lo], [0.0, 0.0, z_hi]])
+        end_faces = []
+        for (P, _), centre in zip(polys.values(), (nv, nv + 1)):   # axis points at z_lo, z_hi
+            Pn = _rolled(P, 1)
+            fan = np.empty((len(P), 3), np.int64)
+            fan[:, 0] = centre
+            fan[:, 1], fan[:, 2] = (Pn, P) if centre == nv else (P, Pn)   # normals -z at z_lo
+            end_faces.append(fan)
+        end_kinds = [FACE_END_LO, FACE_END_HI]
+        tri = _merge_flat(A_ids, A_th, la, B_ids, B_th, lb)
     else:
-        faces_thread[:] = faces_thread[:, [0, 2, 1]]  # material outside: normals point inward
-        # body polygon: no step wider than step_max, whose sagitta is tol
-        step_max = 2.0 * math.acos(1.0 - tol / body_radius)
-        two_pi = 2.0 * math.pi
-        rings = {}
-        for name, z_e, kind in (("lo", z_lo, FACE_END_LO), ("hi", z_hi, FACE_END_HI)):
-            P, th = polys[name]
-            ang = _ring_angles(th, np.hypot(vertices[P, 0], vertices[P, 1]), step_max)
-            rids = len(vertices) + np.arange(len(ang))
-            vertices = np.concatenate([vertices, np.column_stack(
-                [body_radius * np.cos(ang), body_radius * np.sin(ang), np.full(len(ang), z_e)])])
-            rings[name] = (rids, ang)
-            rel = (ang - th[0]) % two_pi            # circle vertices from the polygon start on
-            order = np.argsort(rel, kind="stable")
-            b_th = th[0] + rel[order]
-            a_ids = [np.concatenate([P, [P[0]]])]
-            a_th = [np.concatenate([th, [th[0] + two_pi]])]
-            b_ids = [np.concatenate([rids[order], rids[order[:1]]])]
-            f = merge_strips(a_ids, a_th, b_ids, [np.concatenate([b_th, b_th[:1] + two_pi])])  # normals -z
-            if name == "hi":
-                f = f[:, [0, 2, 1]]
-            face_lists.append(f)
-            kinds.append(np.full(len(f), kind, np.int8))
-        # body cylinder between the two circles (their angles differ where the tops of the
-        # falls were added); every triangle spans at most one circle step
-        (lo_ids, lo_ang), (hi_ids, hi_ang) = rings["lo"], rings["hi"]
-        side = merge_strips([np.concatenate([lo_ids, lo_ids[:1]])],
-                            [np.concatenate([lo_ang, lo_ang[:1] + two_pi])],
-                            [np.concatenate([hi_ids, hi_ids[:1]])],
-                            [np.concatenate([hi_ang, hi_ang[:1] + two_pi])])
-        face_lists.append(side)
-        kinds.append(np.full(len(side), FACE_BODY, np.int8))
+        extra, strips = _body_rings(polys, V_small[polys["lo"][0] - nv_cols], V_small[polys["hi"][0] - nv_cols],
+                                    nv, body_radius, tol, z_lo, z_hi)
+        A_l, Ath_l, B_l, Bth_l = zip(*strips)
+        tri = _merge_flat(np.concatenate([A_ids, *A_l]), np.concatenate([A_th, *Ath_l]),
+                          np.concatenate([la, [len(x) for x in A_l]]),
+                          np.concatenate([B_ids, *B_l]), np.concatenate([B_th, *Bth_l]),
+                          np.concatenate([lb, [len(x) for x in B_l]]))
+        at = np.cumsum([len(irr_rows)] + [len(x) + len(y) - 2 for x, _, y, _ in strips])
+        end_faces = [tri[at[0]:at[1]], tri[at[1]:at[2], [0, 2, 1]], tri[at[2]:]]   # z_hi: normals +z
+        end_kinds = [FACE_END_LO, FACE_END_HI, FACE_BODY]
+    n_irr = len(irr_rows)
 
-    faces = np.concatenate(face_lists)
-    kind = np.concatenate(kinds)
-    if profile.hand_sign < 0:
-        vertices = vertices * np.array([1.0, -1.0, 1.0])
-        faces = faces[:, [0, 2, 1]]
+    # --- vertices: strand columns (bulk), then the small sets, in the part's hand
+    left = profile.hand_sign < 0
+    vertices = np.empty((nv + len(extra), 3))
+    tail = vertices[nv_cols:]
+    tail[:len(V_small)] = V_small
+    tail[len(V_small):] = extra
+    if left:
+        tail *= np.array([1.0, -1.0, 1.0])
+    if nv_cols:
+        _strand_column_vertices(vertices[:nv_cols], c0, n_g, r_g, base_g, u_g, dth, L, warp, left)
+
+    # --- faces: thread bands (bulk), then the end faces, in the part's hand
+    flip_thread = bool(profile.internal) != left      # the nut's material is outside: normals inward
+    n_end_faces = sum(len(f) for f in end_faces)
+    faces = np.empty((T + n_end_faces, 3), np.int64)
+    kind = np.empty(T + n_end_faces, np.int8)
+    kind[:T] = FACE_THREAD
+    q_a = strand_base + K0 - 1 - c0          # a_{K0 - 1}: strand g's column before the middle
+    q_b = strand_base[h] + K0 - 1 - c0h      # b_{K0 - 1}
+    _band_rows(faces, row0, n_tri, row0 + n_pre, q_a, q_b, flip_thread)
+    faces[irr_rows] = tri[:n_irr, [0, 2, 1]] if flip_thread else tri[:n_irr]
+    f0 = T
+    for f, kd in zip(end_faces, end_kinds):
+        faces[f0:f0 + len(f)] = f[:, [0, 2, 1]] if left else f
+        kind[f0:f0 + len(f)] = kd
+        f0 += len(f)
     return ThreadMesh(profile.part, vertices, faces, kind, profile, warp, first_mid, z_lo, z_hi,
                       tol, body_radius, meta={"columns_per_turn": ncol, "strands": G,
                                               "flank_segments": len(tess.flank_radii) - 1})
+
+
+def _strand_column_vertices(out: NDArray, c0: NDArray, n_g: NDArray, r_g: NDArray, base_g: NDArray,
+                            u_g: NDArray, dth: float, L: float, warp: PitchWarp, left: bool) -> None:
+    """Vertices of strand g at columns c0[g] .. c0[g] + n_g[g] - 1, strand after strand, into
+    ``out``: (r cos theta, r sin theta, W(base + L theta / 2 pi) + u) at theta = column * dth,
+    y negated for a left hand.
+
+    cos, sin and the helix advance L theta / 2 pi depend on the column only: they are
+    tabulated over the column range and gathered (the same float64 values as computing
+    them per vertex). Few and reused temporaries: memory traffic is what this costs."""
+    live = n_g > 0
+    cmin = int(c0[live].min())
+    cmax = int((c0 + n_g - 1)[live].max())
+    th_tab = np.arange(cmin, cmax + 1) * dth
+    col = _runs(c0 - cmin, n_g)                   # column index into the tables, per vertex
+    x, y, z = out[:, 0], out[:, 1], out[:, 2]
+    r = np.repeat(r_g, n_g)
+    buf = np.take(np.cos(th_tab), col, mode="clip")   # in range; "clip" only skips a buffer
+    np.multiply(r, buf, out=x)
+    np.take(np.sin(th_tab), col, out=buf, mode="clip")
+    np.multiply(r, buf, out=y)
+    if left:
+        np.negative(y, out=y)                     # (r sin) * -1, bit for bit
+    del r
+    np.take(L * th_tab / (2 * math.pi), col, out=buf, mode="clip")
+    del col
+    m = np.add(np.repeat(base_g, n_g), buf, out=buf)
+    if isinstance(warp, PitchWarp) and warp.is_identity:
+        # W(m) + u = (m + 0.0) + u, bit for bit m + (u + 0.0)
+        np.add(m, np.repeat(u_g + 0.0, n_g), out=z)
+    else:
+        np.add(warp(m), np.repeat(u_g, n_g), out=z)
+
+
+def _band_rows(faces: NDArray[np.int64], row0: NDArray, n_rows: NDArray, first: NDArray, a: NDArray,
+               b: NDArray, flip: bool) -> None:
+    """Write the regular middle pattern of every band into the rows of ``faces`` its band covers.
+
+    Band g owns rows row0[g] .. row0[g] + n_rows[g] - 1 (all bands together: a contiguous
+    block from row 0); its middle starts at row first[g] and is a run of quads t = 0, 1, ...:
+    row first + 2 t = (a + t, a + t + 1, b + t), row first + 2 t + 1 = (a + t + 1, b + t + 1,
+    b + t), with a = a[g], b = b[g] (columns 1 and 2 swapped if ``flip``). The other rows of
+    the block get values the caller must overwrite: those of a band outside its middle, and
+    a last odd row.
+
+    Every value is r // 2 + a constant of its band, column and row parity (r: the row), so
+    the row pairs (2 s, 2 s + 1) of band g, g the band of row 2 s, are s + one 6-vector of
+    band g. Read as one flat array, that is a running sum whose steps repeat with period 6
+    within a band: the steps are gathered into the face array and summed in place. A pair
+    across two bands is wrong in its second row, the first row of the next band; that row
+    is never in a middle (a band's chains start with at least two events before it).
+    """
+    n_pairs = int(n_rows.sum()) // 2
+    if n_pairs == 0:
+        return
+    off = np.empty((len(a), 2, 3), np.int64)       # band, row parity, column
+    c1, c2 = (2, 1) if flip else (1, 2)
+    for v in (0, 1):
+        par = (v + first) & 1                       # parity of (row - first) in these rows
+        d = (v - first - par) // 2                  # quad t = r // 2 + d
+        off[:, v, 0] = a + d + par
+        off[:, v, c1] = np.where(par == 1, b + d + 1, a + d + 1)
+        off[:, v, c2] = b + d
+    s0 = np.minimum((row0 + 1) // 2, n_pairs)       # pairs whose first row is in band g
+    cnt = np.minimum((row0 + n_rows + 1) // 2, n_pairs) - s0
+    live = cnt > 0
+    off, cnt = off.reshape(-1, 6)[live], cnt[live]
+    step = np.empty_like(off)
+    step[:, 0] = off[:, 0] + 1 - off[:, 5]
+    step[:, 1:] = np.diff(off, axis=1)
+    pairs = faces[:2 * n_pairs].reshape(n_pairs, 6)
+    np.take(step, np.repeat(np.arange(len(cnt)), cnt), axis=0, out=pairs, mode="clip")
+    pairs[(np.cumsum(cnt) - cnt)[1:], 0] = off[1:, 0] + 1 - off[:-1, 5]
+    pairs[0, 0] = off[0, 0]
+    flat = pairs.reshape(-1)
+    np.cumsum(flat, out=flat)
 
 
 def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
