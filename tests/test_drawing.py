@@ -235,3 +235,21 @@ def _inside(V: np.ndarray, F: np.ndarray, q: np.ndarray) -> bool:
     t = np.einsum("ij,ij->i", e2, qv) / np.where(ok, det, 1.0)
     hits = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
     return bool(hits.sum() % 2)
+
+
+def test_pdf_sheet_axes_give_the_bytes_of_plain_axes(drawings, tmp_path, monkeypatch):
+    """Issue 17: the sheets add ezdxf's patches without growing the axes' data limits (the
+    view is the sheet, set afterwards); the page is byte for byte the one plain matplotlib
+    Axes give. The roller sheet has every kind of entity: text, hatches, linear, angular and
+    radius dimensions, bulges."""
+    from matplotlib.axes import Axes
+
+    from prs_geom.exports import drawing
+    from prs_geom.exports.drawing import build_drawing, render_pdf
+
+    d, contact, _, _, _ = drawings
+    fast, plain = tmp_path / "fast.pdf", tmp_path / "plain.pdf"
+    render_pdf([build_drawing(d, contact, "roller", DATE, VERSION)], fast)
+    monkeypatch.setattr(drawing, "_sheet_axes_class", lambda: Axes)
+    render_pdf([build_drawing(d, contact, "roller", DATE, VERSION)], plain)
+    assert fast.read_bytes() == plain.read_bytes()

@@ -4,29 +4,88 @@ of the ratings (a light renderer of its own, :func:`plot_rating`).
 Exporter: takes the numbers of the loads stage (:class:`~prs_geom.analysis.loads.LoadsResult`)
 and of the rating stage, writes files and hands the SVG text on (the HTML report shows it
 inline).
+
+matplotlib is imported on first use, not with this module (about 1 s, issue 17): the rating
+figure needs none of it but a tick locator and a font file. The figures are
+:class:`matplotlib.figure.Figure` objects made without pyplot (no figure manager to close);
+``plt`` is still offered, lazily, for callers that draw with pyplot (the harmonic report).
 """
 from __future__ import annotations
 
+import functools
 import html
 import io
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Callable
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-# SVG element ids from a fixed salt: the same figure gives the same file bytes
-matplotlib.rcParams["svg.hashsalt"] = "prs-geom"
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 
-def save_figure(fig, out: Path, stem: str, svgs: dict[str, str] | None = None, tight: bool = True) -> list[str]:
+@functools.cache
+def _matplotlib() -> Any:
+    """matplotlib, imported and set up once: the Agg backend (headless, for pyplot users) and
+    a fixed SVG hash salt, so that the same figure gives the same SVG element ids, i.e. the
+    same file bytes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    matplotlib.rcParams["svg.hashsalt"] = "prs-geom"
+    return matplotlib
+
+
+def __getattr__(name: str) -> Any:
+    """``plt`` (matplotlib.pyplot on the Agg backend), imported when first asked for."""
+    if name == "plt":
+        _matplotlib()
+        import matplotlib.pyplot as plt
+
+        return plt
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _figure(nrows: int = 1, ncols: int = 1, *, figsize: tuple[float, float] | None = None,
+            **kw: Any) -> tuple[Figure, Any]:
+    """A figure and its axes as ``pyplot.subplots(nrows, ncols, figsize=..., **kw)`` makes
+    them, without pyplot: the same rcParams defaults and layout, so the same file bytes
+    (``tests/test_plots.py``), and no figure manager to register and close."""
+    _matplotlib()
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kw)
+
+
+def save_figure(fig: Figure, out: Path, stem: str, svgs: dict[str, str] | None = None,
+                tight: bool = True) -> list[str]:
     """Save ``fig`` as ``stem.png`` and ``stem.svg`` (no timestamp in the SVG) and close it;
     the SVG text also goes into ``svgs[stem]`` when a dict is given. ``tight=False`` keeps the
-    figure's own layout and saves one layout pass per file (for figures laid out by hand)."""
+    figure's own layout and saves one layout pass per file (for figures laid out by hand).
+
+    Parameters
+    ----------
+    fig
+        A matplotlib figure, made by :func:`_figure` or by pyplot (then it is closed here).
+    out
+        Output folder.
+    stem
+        File name without suffix.
+    svgs
+        Receives the SVG text under ``stem`` when given.
+    tight
+        ``bbox_inches="tight"`` for both files.
+
+    Returns
+    -------
+    list of str
+        The two file names written.
+    """
+    _matplotlib()
     bbox = "tight" if tight else None
     fig.savefig(out / f"{stem}.png", dpi=130, bbox_inches=bbox)
     buf = io.BytesIO()
@@ -34,14 +93,44 @@ def save_figure(fig, out: Path, stem: str, svgs: dict[str, str] | None = None, t
     (out / f"{stem}.svg").write_bytes(buf.getvalue())
     if svgs is not None:
         svgs[stem] = buf.getvalue().decode("utf-8")
-    plt.close(fig)
+    # a pyplot figure stays registered (and alive) until closed; a figure made without pyplot
+    # has no manager, and when pyplot was never imported no figure can be one of its own
+    plt = sys.modules.get("matplotlib.pyplot")
+    if plt is not None and fig.canvas.manager is not None:
+        plt.close(fig)
     return [f"{stem}.png", f"{stem}.svg"]
 
 
-def _per_side(draw, subtitle: str, ylabel: str, title: str):
+def plot_detached(plot: Callable[..., list[str]], *args: Any, **kwargs: Any) -> tuple[list[str], dict[str, str]]:
+    """Run one of this module's plot functions and return what it writes, ``(file names,
+    {stem: SVG text})``, instead of filling the caller's ``svgs`` dict.
+
+    For a worker process (``ProcessPoolExecutor.submit(plot_detached, plot_loads, out, ...)``):
+    the function and its arguments (paths, numbers, dicts, arrays) pickle, the files go
+    straight into ``out`` and the SVG texts come back with the result. The worker sets up
+    matplotlib as this process does (:func:`_matplotlib`), so the bytes are the same.
+
+    Parameters
+    ----------
+    plot
+        :func:`plot_loads`, :func:`plot_tolerance` or :func:`plot_rating`.
+    *args, **kwargs
+        Its arguments but ``svgs``.
+
+    Returns
+    -------
+    tuple of (list of str, dict of str to str)
+        The file names written and the SVG texts by stem.
+    """
+    svgs: dict[str, str] = {}
+    files = plot(*args, svgs=svgs, **kwargs)
+    return files, svgs
+
+
+def _per_side(draw, subtitle: str, ylabel: str, title: str) -> Figure:
     """Two panels, nut-roller and roller-screw, sharing the coefficient axis; ``draw(ax, key)``
     plots the curves of one side (key: "ldc_nut_roller" or "ldc_roller_screw")."""
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    fig, axes = _figure(1, 2, figsize=(10, 4), sharey=True)
     for ax, key, side in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
         draw(ax, key)
         ax.axhline(1.0, color="0.6", lw=0.8)
@@ -72,7 +161,7 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
                     f"{name}: load distribution at the design load")
     files += save_figure(fig, out, "loads_ldc", svgs)
 
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = _figure(figsize=(7, 4))
     j = np.arange(1, len(roller_corr_um) + 1)
     ax.plot(j, roller_corr_um, "o-", label="roller p_r,j - p")
     ax.plot(j, nut_corr_um, "s-", label="nut p_n,j - p")
@@ -98,7 +187,7 @@ def plot_tolerance(out: Path, name: str, worst: np.ndarray, per_case: list[tuple
     """Histogram and empirical CDF of the worst load-distribution coefficient of a tolerance
     study (``worst``: each sample's worst over both sides and all loads; ``per_case``:
     (label, values) per load); the no-error value as a vertical line."""
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (ax1, ax2) = _figure(1, 2, figsize=(10, 4))
     bins = max(10, min(60, int(np.sqrt(worst.size))))
     ax1.hist(worst, bins=bins, color="C0", alpha=0.8)
     ax1.axvline(deterministic, color="C3", lw=1.2, label=f"no error {deterministic:.3f}")
@@ -220,7 +309,7 @@ class _Canvas:
     def png(self, path: Path, scale: int = 2) -> None:
         from PIL import Image, ImageDraw, ImageFont
 
-        font_file = Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
+        font_file = Path(_matplotlib().get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
         img = Image.new("RGB", (self.w * scale, self.h * scale), "white")
         draw = ImageDraw.Draw(img)
         fonts: dict[float, Any] = {}

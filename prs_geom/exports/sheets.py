@@ -70,14 +70,23 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     wb = Workbook()
     summary = wb.active
     summary.title = "summary"
+    # one instance of each style, shared by all its cells: openpyxl keeps one copy per
+    # distinct style in the workbook anyway, and building a Border per cell was most of the
+    # cost of the tables (issue 17)
     thin = Side(style="thin", color="999999")
+    bold = Font(bold=True)
+    title_fill = PatternFill("solid", fgColor="DDE6F0")
+    title_border = Border(top=thin, bottom=thin, left=thin, right=thin)
+    wrap_top = Alignment(wrap_text=True, vertical="top")
+    key_font = Font(italic=True, color="777777", size=8)
+    row_border = Border(bottom=Side(style="hair", color="CCCCCC"))
     parts = list(sheets)
     design = next(iter(sheets.values())).header["design"] if sheets else ""
     summary.append([f"Pitch-modification machining sheets of design '{design}'"])
     summary["A1"].font = Font(bold=True, size=13)
     summary.append(["field"] + parts)
     for c in range(1, len(parts) + 2):
-        summary.cell(row=2, column=c).font = Font(bold=True)
+        summary.cell(row=2, column=c).font = bold
     keys = list(dict.fromkeys(k for sh in sheets.values() for k in sh.header))
     for k in keys:
         summary.append([k] + [sheets[p].header.get(k) for p in parts])
@@ -88,12 +97,12 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
             if isinstance(cell.value, float):
                 cell.number_format = fmt
     r0 = len(keys) + 4
-    summary.cell(row=r0, column=1, value="thread starts").font = Font(bold=True)
+    summary.cell(row=r0, column=1, value="thread starts").font = bold
     r0 += 1
     skeys = ["part", "start", "angular_index_deg", "axial_offset_mm", "nominal_lead_mm", "lead_min_mm",
              "lead_max_mm", "teeth_at_theta_0"]
     for c, k in enumerate(skeys, start=1):
-        summary.cell(row=r0, column=c, value=k).font = Font(bold=True)
+        summary.cell(row=r0, column=c, value=k).font = bold
     for p_ in parts:
         for st in sheets[p_].starts:
             r0 += 1
@@ -106,7 +115,7 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     for c in range(2, len(parts) + 2):
         summary.column_dimensions[get_column_letter(c)].width = 60
         for r in range(3, len(keys) + 3):
-            summary.cell(row=r, column=c).alignment = Alignment(wrap_text=True, vertical="top")
+            summary.cell(row=r, column=c).alignment = wrap_top
     summary.freeze_panes = "A3"                 # the title and the part names stay
     _print_setup(summary, design, "summary", version, date)
     for part, sheet in sheets.items():
@@ -117,11 +126,11 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
         title_row, key_row = 2, 3
         for c, (key, title, unit) in enumerate(COLUMNS, start=1):
             cell = ws.cell(row=title_row, column=c, value=f"{title} ({unit})" if unit else title)
-            cell.font = Font(bold=True)
-            cell.alignment = Alignment(wrap_text=True, vertical="top")
-            cell.fill = PatternFill("solid", fgColor="DDE6F0")
-            cell.border = Border(top=thin, bottom=thin, left=thin, right=thin)
-            ws.cell(row=key_row, column=c, value=key).font = Font(italic=True, color="777777", size=8)
+            cell.font = bold
+            cell.alignment = wrap_top
+            cell.fill = title_fill
+            cell.border = title_border
+            ws.cell(row=key_row, column=c, value=key).font = key_font
         for i, row in enumerate(sheet.rows):
             for c, (key, _, unit) in enumerate(COLUMNS, start=1):
                 v = row[key]
@@ -131,7 +140,7 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
                     cell.number_format = "0.00000"
                 elif unit == "um":
                     cell.number_format = "0.00"
-                cell.border = Border(bottom=Side(style="hair", color="CCCCCC"))
+                cell.border = row_border
         for c, (key, title, unit) in enumerate(COLUMNS, start=1):
             # wide enough for the key and the longest displayed number; titles wrap
             ws.column_dimensions[get_column_letter(c)].width = max(len(key) + 2, 12)
