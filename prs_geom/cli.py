@@ -98,12 +98,13 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    from prs_geom.background import default_workers
     from prs_geom.mesh.budget import estimate
 
     design = _load_any(args.design)
     _warn(design)
     if isinstance(design, PRSDesign):
-        est = estimate(design)
+        est = estimate(design, workers=default_workers())
         print(f"design {design.name} is valid; a build meshes {est.describe()}")
     else:
         print(f"design {design.name} (harmonic) is valid")

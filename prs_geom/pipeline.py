@@ -43,6 +43,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.rating import RatingResult
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
+    from prs_geom.background import Background, Job
 
 REPORT_NAME = "report.json"
 #: Version of the report.json layout (``format_version``); the JSON Schema
@@ -123,6 +124,13 @@ class BuildOptions:
     step: bool = False
 
 
+@dataclass(frozen=True)
+class _Pending:
+    """A place in the report's file list kept for a background job's files."""
+
+    job: str
+
+
 @dataclass
 class BuildContext:
     """What stages share: the design, the temporary output folder, the report being
@@ -141,6 +149,61 @@ class BuildContext:
     meshes: MeshStage | None = None
     machining: dict[str, "MachiningSheet"] | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
+    #: worker processes for the checks, drawings and plots (None: all in this process)
+    background: "Background | None" = None
+    #: background jobs by stage name, taken by the stage at its place in the run
+    jobs: dict[str, "Job"] = field(default_factory=dict)
+    #: the stages of this run (name, function): a job is started only for a stage that will run
+    stages: list[tuple[str, Any]] = field(default_factory=list)
+    #: time of background jobs by the stage that started them (s)
+    worker_seconds: dict[str, float] = field(default_factory=dict)
+    #: time the main process waited for background jobs, by the stage that waited (s)
+    waited: dict[str, float] = field(default_factory=dict)
+    #: the stage running now
+    current_stage: str = ""
+
+    def submit(self, name: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
+        """Start ``fn(*args, **kwargs)`` for the stage ``name`` in a worker process when the
+        build has them; else it runs when the stage takes it (:meth:`take`)."""
+        from prs_geom.background import Background
+
+        bg = self.background if self.background is not None else Background(0)
+        self.jobs[name] = bg.submit(fn, *args, **kwargs)
+
+    def take(self, name: str) -> Any:
+        """The result of the job ``name`` (waits for it). The job's own time is booked to the
+        stage that started it (``plot:loads`` to ``loads``), the wait is not booked to the
+        stage running now."""
+        job = self.jobs.pop(name)
+        t0 = time.perf_counter()
+        value = job.result()
+        waited = time.perf_counter() - t0
+        owner = name.split(":", 1)[1] if name.startswith("plot:") else {"mesh_checks": "meshes"}.get(name, name)
+        self.worker_seconds[owner] = self.worker_seconds.get(owner, 0.0) + job.seconds
+        self.waited[self.current_stage] = self.waited.get(self.current_stage, 0.0) + waited
+        return value
+
+    def add_plot(self, name: str, plot: Callable[..., list[str]], *args: Any) -> None:
+        """Draw a figure of :mod:`prs_geom.exports.plots` (in a worker when there are any);
+        its files keep their place in the report's file list, its SVG text goes to
+        ``plots_svg`` when :meth:`collect_plots` runs."""
+        from prs_geom.exports.plots import plot_detached
+
+        key = f"plot:{name}"
+        self.submit(key, plot_detached, plot, *args)
+        self.report["files"].append(_Pending(key))
+
+    def collect_plots(self) -> None:
+        """Wait for the plots still drawing; put their files and SVG texts in place."""
+        files = []
+        for entry in self.report["files"]:
+            if isinstance(entry, _Pending):
+                names, svgs = self.take(entry.job)
+                files += names
+                self.plots_svg.update(svgs)
+            else:
+                files.append(entry)
+        self.report["files"] = files
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
@@ -178,6 +241,12 @@ def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
     ctx.contact = analyse_contact(ctx.design)
     ctx.report["contact"] = ctx.contact.report()
+    if any(name == "checks" for name, _ in ctx.stages):
+        ctx.submit("checks", checks_job, ctx.design, ctx.contact)
+    if any(name == "manufacturing" for name, _ in ctx.stages):
+        from prs_geom.exports.drawing import write_drawings
+
+        ctx.submit("manufacturing", write_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
 
 
 def stage_gears(ctx: BuildContext) -> None:
@@ -207,9 +276,8 @@ def stage_loads(ctx: BuildContext) -> None:
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
     p = d.thread.pitch_mm
     pr, pn = np.array(loads.designed_roller_mm), np.array(loads.designed_nut_mm)
-    files = plot_loads(ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc, loads.designed_off_design,
-                       (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label, ctx.plots_svg)
-    ctx.report["files"] += files
+    ctx.add_plot("loads", plot_loads, ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc,
+                 loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
 
 
 #: Why the build has no robust pitch in its rating section.
@@ -238,7 +306,7 @@ def stage_rating(ctx: BuildContext) -> None:
         ctx.report["warnings"].append(
             f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
             f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
-    ctx.report["files"] += plot_rating(ctx.out, d.name, r.curves, ctx.plots_svg)
+    ctx.add_plot("rating", plot_rating, ctx.out, d.name, r.curves)
 
 
 def stage_tolerance(ctx: BuildContext) -> None:
@@ -254,30 +322,43 @@ def stage_tolerance(ctx: BuildContext) -> None:
                                             execution=Execution(workers=None, progress=ctx.progress))
     ctx.report["tolerance"] = study.section
     per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
-    ctx.report["files"] += plot_tolerance(ctx.out, d.name, study.worst, per_case if len(per_case) > 1 else [],
-                                          float(study.deterministic.max()), ctx.plots_svg)
+    ctx.add_plot("tolerance", plot_tolerance, ctx.out, d.name, study.worst,
+                 per_case if len(per_case) > 1 else [], float(study.deterministic.max()))
 
 
-def stage_meshes(ctx: BuildContext) -> None:
-    """Thread meshes, assembly, mesh checks (``checks.meshes``) and mesh exports."""
-    from prs_geom.exports.meshes import export_meshes
+def mesh_checks_job(design: PRSDesign, parts: dict[str, Any], progress: ProgressFn = silent) -> list[dict[str, Any]]:
+    """``checks.meshes``: each part mesh against its analytic surface and volume
+    (:func:`prs_geom.mesh.thread.mesh_report`), in the order of ``parts``."""
     from prs_geom.geometry.frames import thread_length
-    from prs_geom.mesh.assembly import build_assembly, build_part
     from prs_geom.mesh.thread import analytic_thread_volume, mesh_report
 
-    d = ctx.design
-    # the screw of every export is the theoretical one (the state the analysis certifies)
-    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
     rows = []
-    lengths = {"screw": d.screw.length_mm, "roller": thread_length(d), "nut": thread_length(d)}
-    for i, (name, tm) in enumerate(asm.parts.items()):
+    lengths = {"screw": design.screw.length_mm, "roller": thread_length(design), "nut": thread_length(design)}
+    for i, (name, tm) in enumerate(parts.items()):
         graded = not tm.warp.is_identity
         vol = None if graded else analytic_thread_volume(
             tm.profile, lengths[name], tm.body_radius) - tm.datum_mark.volume
         rows.append(mesh_report(tm, vol))
-        ctx.progress("mesh checks", i + 1, len(asm.parts))
-    ctx.meshes = MeshStage(asm, rows)
-    ctx.report["checks"]["meshes"] = rows
+        progress("mesh checks", i + 1, len(parts))
+    return rows
+
+
+def stage_meshes(ctx: BuildContext) -> None:
+    """Thread meshes, assembly, mesh checks (``checks.meshes``; in a worker while the meshes
+    are written, taken at the checks stage) and mesh exports."""
+    from prs_geom.exports.meshes import export_meshes
+    from prs_geom.mesh.assembly import build_assembly, build_part
+
+    d = ctx.design
+    # the screw of every export is the theoretical one (the state the analysis certifies)
+    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
+    if any(name == "checks" for name, _ in ctx.stages) and ctx.background is not None and ctx.background.workers:
+        ctx.submit("mesh_checks", mesh_checks_job, d, asm.parts)
+        ctx.meshes = MeshStage(asm, [])
+    else:
+        rows = mesh_checks_job(d, asm.parts, ctx.progress)
+        ctx.meshes = MeshStage(asm, rows)
+        ctx.report["checks"]["meshes"] = rows
     ctx.report["assembly"] = {
         "parts": list(asm.placed),
         "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
@@ -306,17 +387,31 @@ def stage_meshes(ctx: BuildContext) -> None:
                                               f"{part}.step was not written: {row['reason']}")
 
 
-def stage_checks(ctx: BuildContext) -> None:
+def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> dict[str, Any]:
     """FCL verification of the contacts and the interference check (both screws), with the
-    theoretical screw of the contact stage."""
+    theoretical screw of the contact stage: ``{"fcl": ..., "interference": ...}``. Needs
+    only the design and the contact result, so a build starts it in a worker right after
+    the contact stage."""
     from prs_geom.checks.fcl import verify_contacts
     from prs_geom.checks.interference import interference_checks
 
-    screw = ctx.contact.screw_profile
-    ctx.report["checks"]["fcl"] = verify_contacts(ctx.design, screw_profile=screw,
-                                                  designed_gaps=ctx.contact.tooth_gaps)
-    ctx.progress("fcl verification", 1, 1)
-    ctx.report["checks"]["interference"] = interference_checks(ctx.design, screw, progress=ctx.progress)
+    screw = contact.screw_profile
+    fcl_section = verify_contacts(design, screw_profile=screw, designed_gaps=contact.tooth_gaps)
+    progress("fcl verification", 1, 1)
+    return {"fcl": fcl_section, "interference": interference_checks(design, screw, progress=progress)}
+
+
+def stage_checks(ctx: BuildContext) -> None:
+    """The checks of :func:`checks_job` (started after the contact stage, or run here), after
+    the mesh checks of the meshes stage when they ran in a worker."""
+    if "mesh_checks" in ctx.jobs:
+        rows = ctx.take("mesh_checks")
+        ctx.meshes = MeshStage(ctx.meshes.assembly, rows)
+        ctx.report["checks"]["meshes"] = rows
+    if "checks" in ctx.jobs:
+        ctx.report["checks"].update(ctx.take("checks"))
+    else:
+        ctx.report["checks"].update(checks_job(ctx.design, ctx.contact, ctx.progress))
     ctx.report["warnings"] += check_warnings(ctx.report)
 
 
@@ -353,14 +448,19 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
-    from prs_geom.exports.drawing import write_drawings
+    if "manufacturing" in ctx.jobs:  # the drawings, started after the contact stage
+        ctx.report["files"] += ctx.take("manufacturing")
+    else:
+        from prs_geom.exports.drawing import write_drawings
 
-    ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
+        ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
 
 
 def stage_html(ctx: BuildContext) -> None:
     """The self-contained HTML report, from the stage results."""
     from prs_geom.exports.html import write_html
+
+    ctx.collect_plots()
 
     write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
                contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
@@ -421,14 +521,35 @@ def check_warnings(report: dict[str, Any]) -> list[str]:
 
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
-               options: BuildOptions | None = None) -> BuildContext:
-    ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress,
-                       options=options or BuildOptions())
-    for name, fn in (STAGES if stages is None else stages):
-        t0 = time.perf_counter()
-        fn(ctx)
-        ctx.report["timings_s"][name] = time.perf_counter() - t0
-        progress(name, 1, 1)
+               options: BuildOptions | None = None, workers: int | None = None) -> BuildContext:
+    """Run ``stages`` (:data:`STAGES` by default) on a new :class:`BuildContext`; the checks,
+    drawings and plots go to worker processes when ``workers`` allows
+    (:mod:`prs_geom.background`; None: ``$PRS_GEOM_WORKERS`` or the default).
+
+    ``timings_s`` gives each stage's own work: its wall time in the main process, less the
+    time it waited for background jobs, plus the time of the jobs it started (the checks,
+    the drawings of ``manufacturing``, the plots of ``loads``, ``rating``, ``tolerance``),
+    wherever they ran. With workers their sum exceeds the build's wall time.
+    """
+    from prs_geom.background import Background
+
+    stages = STAGES if stages is None else stages
+    with Background(workers) as background:
+        ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress,
+                           options=options or BuildOptions(), background=background, stages=list(stages))
+        for name, fn in stages:
+            ctx.current_stage = name
+            t0 = time.perf_counter()
+            fn(ctx)
+            ctx.report["timings_s"][name] = time.perf_counter() - t0
+            progress(name, 1, 1)
+        ctx.current_stage = "end"
+        ctx.collect_plots()
+        for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
+            ctx.take(key)
+    timings = ctx.report["timings_s"]
+    for name in timings:
+        timings[name] += ctx.worker_seconds.get(name, 0.0) - ctx.waited.get(name, 0.0)
     return ctx
 
 
@@ -501,7 +622,9 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     harmonic = isinstance(design, HarmonicDesign)
     atomic = AtomicOutputDir(out_dir, {"design": design.name})
     if not harmonic:
-        guard(design, memory_budget)
+        from prs_geom.background import default_workers
+
+        guard(design, memory_budget, workers=default_workers())
     try:
         with atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options)

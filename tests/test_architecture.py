@@ -182,3 +182,17 @@ def test_readme_and_docs_stand_alone():
             path = (md.parent / target).resolve()
             assert path.exists() and ROOT in path.parents, (md.name, target)
     assert "docs/index.md" in (ROOT / "README.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["init"], ["build", "--help"], ["rating", "--help"]])
+def test_help_and_init_import_no_heavy_library(argv):
+    """Issue 17: ``prs-geom --help`` and ``prs-geom init`` answer without loading trimesh,
+    fcl, manifold3d, ezdxf, matplotlib or openpyxl (their import alone costs seconds)."""
+    stmt = ("import contextlib, io; from prs_geom import cli\n"
+            f"with contextlib.redirect_stdout(io.StringIO()):\n"
+            f"    try: cli.main({argv!r})\n"
+            f"    except SystemExit: pass")
+    code = (f"import sys, json\n{stmt}\n"
+            f"print(json.dumps(sorted(m for m in {list(HEAVY)!r} if m in sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == []

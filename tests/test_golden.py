@@ -17,7 +17,9 @@ from fingerprint import DATA, DESIGNS, build_fingerprint, compare_numbers  # noq
 
 
 @pytest.mark.parametrize("key", sorted(DESIGNS))
-def test_build_matches_golden(key, tmp_path):
+def test_build_matches_golden(key, tmp_path, monkeypatch):
+    # a build as users run it: checks, drawings and plots in two worker processes
+    monkeypatch.setenv("PRS_GEOM_WORKERS", "2")
     golden_file = DATA / f"{key}.json"
     if not golden_file.exists():
         pytest.fail(f"no golden for {key}: run tests/golden/regenerate.py")
@@ -28,3 +30,14 @@ def test_build_matches_golden(key, tmp_path):
     changed = {f for f in golden["files"].keys() | new["files"].keys()
                if golden["files"].get(f) != new["files"].get(f)}
     assert not changed, f"files differ from the golden: {sorted(changed)}"
+
+
+def test_serial_build_matches_golden(tmp_path, monkeypatch):
+    """Issue 17: the checks, drawings and plots run in worker processes by default; with
+    ``PRS_GEOM_WORKERS=0`` everything runs in order in one process, and the report and
+    every file are the same as the golden (which the parallel build matches, above)."""
+    monkeypatch.setenv("PRS_GEOM_WORKERS", "0")
+    golden = json.loads((DATA / "default.json").read_text())
+    new = build_fingerprint("default", tmp_path / "default")
+    assert not compare_numbers(golden["report"], new["report"])
+    assert new["files"] == golden["files"]

@@ -282,6 +282,15 @@ def test_estimate_matches_built_meshes_and_bounds_memory():
     # the default build peaks at about 370 MB (measured with ru_maxrss); the estimate bounds it
     e = estimate(PRSDesign())
     assert 370 * 2 ** 20 <= e.peak_bytes <= 2 * 370 * 2 ** 20
+    # with two worker processes the check meshes beside the export meshing: the peaks add,
+    # and each worker has its own interpreter and libraries
+    from prs_geom.mesh import budget
+
+    p = budget.estimate(PRSDesign(), workers=2)
+    export_peak = e.export_triangles * budget.BYTES_PER_EXPORT_TRIANGLE + e.placed_triangles * budget.BYTES_PER_PLACED_TRIANGLE
+    check_peak = e.check_triangles * budget.BYTES_PER_CHECK_TRIANGLE
+    assert p.peak_bytes == pytest.approx(3 * budget.BASE_BYTES + export_peak + check_peak, rel=1e-12)
+    assert e.peak_bytes == pytest.approx(budget.BASE_BYTES + max(export_peak, check_peak), rel=1e-12)
 
 
 # --------------------------------------------------------------------------- messages

@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from readers import khronos_issues, read_3mf, solid, stl_merged
-from prs_geom.exports.meshes import stl_bytes
+from prs_geom.exports.meshes import stl_bytes, write_stl_pieces
 from prs_geom.exports.scene import split_normals
 from prs_geom.geometry.frames import roller_transform
 from prs_geom.mesh.thread import axial_line_crossings
@@ -67,6 +67,19 @@ def test_stl_header_and_vectorised_writer_read_back(built):
     assert m.volume == pytest.approx(1 / 6, rel=1e-7) and m.is_winding_consistent
     with pytest.raises(ValueError, match="solid"):
         stl_bytes(V, F, "solid part")
+
+
+def test_streamed_stl_is_the_one_piece_stl(tmp_path):
+    """Issue 17: the assembly STL is written body by body (one body in memory at a time);
+    the bytes are those of the concatenated mesh, count patched into the header."""
+    rng = np.random.default_rng(7)
+    pieces = [(rng.normal(size=(n, 3)), rng.integers(0, n, size=(2 * n, 3))) for n in (5, 40, 1)]
+    n = write_stl_pieces(iter(pieces), tmp_path / "a.stl", "pieces")
+    V = np.concatenate([p[0] for p in pieces])
+    offsets = np.cumsum([0] + [len(p[0]) for p in pieces[:-1]])
+    F = np.concatenate([p[1] + o for p, o in zip(pieces, offsets)])
+    assert n == len(F) == 92
+    assert (tmp_path / "a.stl").read_bytes() == stl_bytes(V, F, "pieces")
 
 
 def test_exported_parts_do_not_interfere_and_the_nominal_screw_does(built):

@@ -21,6 +21,7 @@ with ``solid`` (which some readers take for ASCII STL).
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -32,15 +33,17 @@ from prs_geom.mesh.assembly import Assembly
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
 
-def stl_bytes(vertices: NDArray[np.float64], faces: NDArray[np.int64], header: str = "") -> bytes:
-    """Binary STL of a triangle mesh; facet normals from the float64 vertices.
-
-    ``header`` (ASCII, at most 80 characters, padded with spaces) must not start with
-    ``solid``.
-    """
+def _check_header(header: str) -> bytes:
     head = header.encode("ascii")
     if len(head) > 80 or head.lower().startswith(b"solid"):
         raise ValueError(f"STL header {header!r}: at most 80 ASCII characters, not starting with 'solid'")
+    return head.ljust(80, b" ")
+
+
+def stl_records(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> bytes:
+    """The triangle records of a binary STL (no header, no count); facet normals from the
+    float64 vertices. Rows are independent, so records of consecutive pieces concatenate to
+    the records of the whole."""
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     tri = V[F]
@@ -49,7 +52,34 @@ def stl_bytes(vertices: NDArray[np.float64], faces: NDArray[np.int64], header: s
     rec = np.zeros(len(F), dtype=_STL_RECORD)
     rec["normal"] = n
     rec["v"] = tri
-    return head.ljust(80, b" ") + np.uint32(len(F)).tobytes() + rec.tobytes()
+    return rec.tobytes()
+
+
+def stl_bytes(vertices: NDArray[np.float64], faces: NDArray[np.int64], header: str = "") -> bytes:
+    """Binary STL of a triangle mesh; facet normals from the float64 vertices.
+
+    ``header`` (ASCII, at most 80 characters, padded with spaces) must not start with
+    ``solid``.
+    """
+    head = _check_header(header)
+    return head + np.uint32(len(faces)).tobytes() + stl_records(vertices, faces)
+
+
+def write_stl_pieces(pieces: Iterable[tuple[NDArray[np.float64], NDArray[np.int64]]], path: Path,
+                     header: str = "") -> int:
+    """Write one binary STL from (vertices, faces) pieces, one piece in memory at a time (the
+    assembly of a long design has millions of triangles); the same bytes as
+    :func:`stl_bytes` of the concatenated pieces. Returns the triangle count."""
+    head = _check_header(header)
+    count = 0
+    with open(path, "wb") as fh:
+        fh.write(head + b"\0\0\0\0")
+        for V, F in pieces:
+            fh.write(stl_records(V, F))
+            count += len(F)
+        fh.seek(80)
+        fh.write(np.uint32(count).tobytes())
+    return count
 
 
 def write_stl(mesh, path: Path, header: str = "") -> None:
@@ -62,7 +92,18 @@ def stl_header(part: str, design_hash: str, frame: str = "part frame") -> str:
 
 
 def rigid_body_arrays(asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Vertices and faces of the assembly with the parts of each rigid body united (manifold3d,
+    """Vertices and faces of the assembly, :func:`rigid_body_pieces` concatenated."""
+    Vs, Fs, v0 = [], [], 0
+    for V, F in rigid_body_pieces(asm):
+        Vs.append(V)
+        Fs.append(F + v0)
+        v0 += len(V)
+    return np.concatenate(Vs), np.concatenate(Fs)
+
+
+def rigid_body_pieces(asm: Assembly) -> Iterator[tuple[NDArray[np.float64], NDArray[np.int64]]]:
+    """Vertices and faces of each rigid body of the assembly, placed in the screw frame, in
+    the order of ``asm.placed``, with the parts of each rigid body united (manifold3d,
     float64): a roller and its gears, the nut and its ring gears touch at end faces, whose
     coincident vertices would otherwise make edges used by four faces (manifold3d may keep
     face-touching parts as separate shells, but their boundaries no longer coincide). Bodies whose parts share one frame
@@ -73,7 +114,6 @@ def rigid_body_arrays(asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.in
     for name, (mesh, T, _) in asm.placed.items():
         bodies.setdefault(asm.rigid_body(name), []).append((mesh, T))
     united: dict[tuple[int, ...], tuple[NDArray[np.float64], NDArray[np.int64]]] = {}
-    Vs, Fs, v0 = [], [], 0
     for body, parts in bodies.items():
         T = parts[0][1]
         same_frame = all(np.array_equal(Tp, T) for _, Tp in parts)
@@ -96,10 +136,7 @@ def rigid_body_arrays(asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.in
         V, F = united[key]
         if same_frame:
             V = V @ T[:3, :3].T + T[:3, 3]
-        Vs.append(V)
-        Fs.append(F + v0)
-        v0 += len(V)
-    return np.concatenate(Vs), np.concatenate(Fs)
+        yield V, F
 
 
 def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None) -> dict[str, str]:
@@ -118,9 +155,8 @@ def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None
     if nominal_screw is not None:
         write_stl(nominal_screw, out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
         files["screw_nominal.stl"] = "nominal screw thread (not the analysed state), part frame, binary STL (mm)"
-    V, F = rigid_body_arrays(asm)
-    (out / "assembly.stl").write_bytes(stl_bytes(V, F, stl_header("assembly, multi-body", design_hash,
-                                                                   "screw frame")))
+    write_stl_pieces(rigid_body_pieces(asm), out / "assembly.stl",
+                     stl_header("assembly, multi-body", design_hash, "screw frame"))
     files["assembly.stl"] = ("the assembly in the screw frame, parts of each rigid body united; multi-body "
                              "binary STL (mm), for viewing")
     scene = assembly_scene(asm, asm.design.name)

@@ -6,9 +6,10 @@ triangles on the thread surface, plus the end faces. A build meshes the parts th
 times: at the design's chord tolerance for the exports, at ``min(tolerance, 2 um)`` for
 the interference check (which also holds an FCL BVH and a manifold3d solid of every
 distinct mesh), and at 0.1 mm for the HTML view. The peak memory is estimated from these
-counts with per-triangle costs measured on this code (``benchmarks/bench_mesh.py`` prints
-the measured peak beside the estimate); the estimate is meant to be an upper bound within
-a factor of about two.
+counts with per-triangle costs measured on this code (``benchmarks/bench_build.py`` prints
+the measured peak of builds; ``tests/test_safety.py`` checks the estimate against built
+meshes); the estimate is meant to be an upper bound within a factor of about two. A build
+with worker processes runs the check beside the export meshing: the two peaks add.
 
 The budget defaults to :data:`DEFAULT_BUDGET_FRACTION` of the memory the operating system
 reports as available; ``--memory-budget`` on the command line sets it explicitly.
@@ -150,8 +151,12 @@ class Estimate:
                 f"memory {format_bytes(self.peak_bytes)}")
 
 
-def estimate(design: PRSDesign, export: bool = True, check: bool = True) -> Estimate:
-    """Estimated triangles and peak memory of meshing ``design`` (exports and/or check)."""
+def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers: int = 0) -> Estimate:
+    """Estimated triangles and peak memory of meshing ``design`` (exports and/or check).
+
+    ``workers``: worker processes of the build (:mod:`prs_geom.background`). With workers the
+    interference check runs beside the export meshing, so their peaks add, and each worker
+    carries its own interpreter and libraries (:data:`BASE_BYTES`)."""
     tol = design.mesh.chord_tolerance_mm
     parts = part_triangles(design, tol)
     export_tri = sum(parts.values())
@@ -163,17 +168,19 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True) -> Esti
         peaks.append(export_tri * BYTES_PER_EXPORT_TRIANGLE + placed * BYTES_PER_PLACED_TRIANGLE)
     if check:
         peaks.append(check_tri * BYTES_PER_CHECK_TRIANGLE)
+    work = sum(peaks) if workers > 0 else max(peaks)
     return Estimate(export_tri if export else 0.0, placed if export else 0.0, check_tri,
-                    BASE_BYTES + max(peaks), parts)
+                    BASE_BYTES * (1 + max(workers, 0)) + work, parts)
 
 
 def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = True,
-          check: bool = True) -> Estimate:
-    """Raise :class:`ResourceLimitError` when meshing ``design`` would exceed the budget.
+          check: bool = True, workers: int = 0) -> Estimate:
+    """Raise :class:`ResourceLimitError` when meshing ``design`` would exceed the budget
+    (``workers``: see :func:`estimate`).
 
     The message names the estimate, the budget and the design fields that drive it.
     """
-    est = estimate(design, export, check)
+    est = estimate(design, export, check, workers)
     budget = default_budget_bytes() if budget_bytes is None else budget_bytes
     if est.peak_bytes > budget:
         biggest = max(est.parts, key=est.parts.get)

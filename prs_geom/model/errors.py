@@ -107,6 +107,10 @@ class DesignError(PRSGeomError, ValueError):
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else super().__str__()
 
+    def __reduce__(self):
+        # a build's background workers send their errors back pickled (prs_geom.background)
+        return _rebuild_design_error, (self.field, self.value, self.rule, self.note, self.args)
+
     def prefixed(self, section: str) -> "DesignError":
         """The same error with ``section.`` put before the field path."""
         return DesignError(f"{section}.{self.field}" if section else self.field, self.value, self.rule,
@@ -115,6 +119,12 @@ class DesignError(PRSGeomError, ValueError):
     def renamed(self, field: str) -> "DesignError":
         """The same error reported under another name (e.g. the CLI flag that set it)."""
         return DesignError(field, self.value, self.rule, self.note)
+
+
+def _rebuild_design_error(field: str, value: Any, rule: str, note: str, args: tuple) -> DesignError:
+    err = DesignError(field, value, rule, note)
+    err.args = args
+    return err
 
 
 class OutputRefused(PRSGeomError):

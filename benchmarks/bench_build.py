@@ -1,0 +1,173 @@
+"""Whole-build speed and memory (issue 17), every figure a ratio to a baseline of the same run.
+
+Run:  python benchmarks/bench_build.py [--quick]
+
+Prints
+
+1. the default build (``prs-geom build`` in a fresh interpreter, best of 3): wall time, its
+   split by stage (``timings_s`` of report.json), peak memory, and its ratio to the
+   *meshing plus file writing* baseline: the part meshes and gears of the assembly
+   (``build_assembly``) plus writing the mesh exports (STL, GLB, 3MF: ``export_meshes``),
+   timed in this process (goal: build <= 3 x baseline);
+2. ``prs-geom --help`` and ``prs-geom init`` against ``python -c "import numpy"`` (goal
+   <= 1.5 x);
+3. scaling with engaged teeth (20, 100, 200): build time and peak memory, ratio to n = 20
+   (goal: n = 200 <= 10 x the n = 20 build, under 1 GB);
+4. scaling with chord tolerance (10, 1, 0.1 um) of the meshing plus mesh-file writing job
+   (the baseline of 1, in a fresh interpreter): time and peak memory, ratio to 10 um.
+
+``--quick`` drops n = 200 and 0.1 um (the heavy cases) and uses one repetition.
+Peak memory is the build's maximum resident set size plus that of its largest worker
+process (``resource.getrusage``; an upper bound of what it holds at once). Set
+``PRS_GEOM_WORKERS=0`` to measure the serial build.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+from timing import best_time  # noqa: E402
+
+#: Runs ``prs-geom ARGV`` in this interpreter's environment and prints its peak RSS (kB).
+CHILD = ("import resource, sys\n"
+         "from prs_geom import cli\n"
+         "code = cli.main(sys.argv[1:])\n"
+         "print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,\n"
+         "      resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr)\n"
+         "sys.exit(code)\n")
+
+
+#: Meshes the default assembly at chord tolerance argv[1] (mm), writes its mesh exports to
+#: argv[2] and prints its peak RSS (kB).
+MESH_CHILD = ("import resource, sys\n"
+              "from pathlib import Path\n"
+              "from prs_geom.analysis.contact import theoretical_screw\n"
+              "from prs_geom.exports.meshes import export_meshes\n"
+              "from prs_geom.mesh.assembly import build_assembly\n"
+              "from prs_geom.model.design import default_design\n"
+              "from prs_geom.model.io import design_hash\n"
+              "d = default_design()\n"
+              "out = Path(sys.argv[2]); out.mkdir()\n"
+              "asm = build_assembly(d, tol=float(sys.argv[1]), screw_profile=theoretical_screw(d).profile)\n"
+              "export_meshes(asm, out, design_hash(d), None)\n"
+              "print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, 0, file=sys.stderr)\n")
+
+
+def run_child(argv: list[str], code: str = CHILD) -> tuple[float, int]:
+    """(wall seconds, peak resident kB) of ``prs-geom argv`` (or of ``code`` with ``argv``)
+    in a fresh interpreter; the peak is the main process's plus its largest worker's (an
+    upper bound of what the build holds at once)."""
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if r.returncode != 0:
+        raise SystemExit(f"prs-geom {' '.join(argv)} failed ({r.returncode}):\n{r.stderr[-2000:]}")
+    fields = next(line for line in r.stderr.splitlines() if line.startswith("PEAK_KB")).split()
+    peak = int(fields[1]) + int(fields[2])
+    return wall, peak
+
+
+def best_child(argv: list[str], repeats: int, out: Path | None = None, code: str = CHILD) -> tuple[float, int]:
+    best = (float("inf"), 0)
+    for _ in range(repeats):
+        if out is not None and out.exists():
+            shutil.rmtree(out)
+        wall, peak = run_child(argv, code)
+        best = min(best, (wall, peak))
+    return best
+
+
+def baseline_meshing_and_writing(tmp: Path, repeats: int) -> float:
+    """Seconds to mesh the default assembly and write its mesh exports, best of ``repeats``."""
+    from prs_geom.analysis.contact import theoretical_screw
+    from prs_geom.exports.meshes import export_meshes
+    from prs_geom.mesh.assembly import build_assembly
+    from prs_geom.model.design import default_design
+    from prs_geom.model.io import design_hash
+
+    d = default_design()
+    screw = theoretical_screw(d).profile
+    folder = tmp / "baseline"
+
+    def job() -> None:
+        if folder.exists():
+            shutil.rmtree(folder)
+        folder.mkdir()
+        asm = build_assembly(d, screw_profile=screw)
+        export_meshes(asm, folder, design_hash(d), None)
+
+    job()  # imports and caches outside the timing
+    return best_time(job, repeats)
+
+
+def teeth_design(tmp: Path, teeth: int) -> Path:
+    """The default design with ``teeth`` engaged teeth (screw length by the default rule)."""
+    from dataclasses import replace
+
+    from prs_geom.model.design import default_design
+    from prs_geom.model.io import dumps_toml
+
+    d = default_design()
+    d = replace(d, name=f"teeth{teeth}", thread=replace(d.thread, engaged_teeth=teeth),
+                screw=replace(d.screw, length_mm=None))
+    path = tmp / f"teeth{teeth}.toml"
+    path.write_text(dumps_toml(d), encoding="utf-8")
+    return path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="skip the heavy cases, one repetition")
+    args = ap.parse_args()
+    reps = 1 if args.quick else 3
+    with tempfile.TemporaryDirectory() as tmpname:
+        tmp = Path(tmpname)
+        out = tmp / "default"
+        wall, peak = best_child(["build", "--out", str(out), "--quiet"], reps, out)
+        stages = json.loads((out / "report.json").read_text(encoding="utf-8"))["timings_s"]
+        base = baseline_meshing_and_writing(tmp, reps)
+        print("1. default build")
+        print(f"   wall {wall:.2f} s, peak {peak / 1024:.0f} MB; meshing + mesh file writing {base:.2f} s; "
+              f"build / baseline {wall / base:.2f} (goal <= 3)")
+        print("   stage work (s, wherever it ran; with worker processes the sum exceeds the wall time):")
+        for name, sec in stages.items():
+            print(f"   {name:14s} {sec:7.3f} s  {sec / wall:6.1%} of the wall time")
+        print(f"   {'sum':14s} {sum(stages.values()):7.3f} s")
+
+        numpy_s = best_time(lambda: subprocess.run([sys.executable, "-c", "import numpy"], check=True), 5)
+        print("2. start-up")
+        print(f"   python -c 'import numpy' {numpy_s:.3f} s")
+        for argv in (["--help"], ["init"]):
+            t = best_time(lambda: subprocess.run([str(Path(sys.executable).parent / "prs-geom"), *argv],
+                                                 check=True, capture_output=True), 5)
+            print(f"   prs-geom {argv[0]:7s} {t:.3f} s  ratio {t / numpy_s:.2f} (goal <= 1.5)")
+
+        print("3. engaged teeth (build)")
+        ref = None
+        for teeth in (20, 100) if args.quick else (20, 100, 200):
+            design = teeth_design(tmp, teeth)
+            o = tmp / f"t{teeth}"
+            w, p = best_child(["build", str(design), "--out", str(o), "--quiet"], 1, o)
+            ref = ref or w
+            print(f"   n = {teeth:3d}: {w:7.2f} s, peak {p / 1024:6.0f} MB, time / (n = 20) {w / ref:5.2f}")
+
+        print("4. chord tolerance (meshing + mesh files)")
+        ref = None
+        for tol_um in (10.0, 1.0) if args.quick else (10.0, 1.0, 0.1):
+            o = tmp / f"m{tol_um:g}"
+            w, p = best_child([f"{tol_um / 1000:g}", str(o)], 1, o, MESH_CHILD)
+            ref = ref or w
+            print(f"   {tol_um:5.1f} um: {w:7.2f} s, peak {p / 1024:6.0f} MB, time / (10 um) {w / ref:6.2f}")
+
+
+if __name__ == "__main__":
+    main()
