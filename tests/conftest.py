@@ -4,6 +4,9 @@ import sys
 sys.path.insert(0, os.path.dirname(__file__))
 # every build in the tests runs under an explicit memory budget, whatever the machine has free
 os.environ.setdefault("PRS_GEOM_MEMORY_BUDGET", "6G")
+# the suite runs its test files on every core (pytest-xdist): builds do their work in their own
+# process rather than spawning workers of their own; tests/test_golden.py runs both ways
+os.environ.setdefault("PRS_GEOM_WORKERS", "0")
 
 from hypothesis import HealthCheck, settings  # noqa: E402
 

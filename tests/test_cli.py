@@ -178,8 +178,15 @@ def test_console_script_exit_code_and_debug_traceback(tmp_path):
 
 
 def test_failing_build_leaves_earlier_output_unchanged(tmp_path, monkeypatch):
+    from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
+    from prs_geom.model.io import save_design
+
+    # a small design: three builds of the default one took a minute
+    small = tmp_path / "small.toml"
+    save_design(PRSDesign(name="small", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
+                          mesh=MeshSettings(chord_tolerance_mm=0.05)), small)
     out = tmp_path / "out"
-    assert run(["build", "--out", str(out), "--quiet"])[0] == 0
+    assert run(["build", str(small), "--out", str(out), "--quiet"])[0] == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     assert "report.json" in before
 
@@ -188,14 +195,14 @@ def test_failing_build_leaves_earlier_output_unchanged(tmp_path, monkeypatch):
         raise RuntimeError("simulated failure in a late stage")
 
     monkeypatch.setattr(pipeline, "STAGES", pipeline.STAGES + [("boom", boom)])
-    code, _, err = run(["build", "--out", str(out), "--quiet"])
+    code, _, err = run(["build", str(small), "--out", str(out), "--quiet"])
     # an unexpected exception is an internal error: one line, exit 70, no traceback
     assert code == 70 and "internal error RuntimeError: simulated failure" in err and "Traceback" not in err
     with pytest.raises(RuntimeError):
-        run(["--debug", "build", "--out", str(out), "--quiet"])
+        run(["--debug", "build", str(small), "--out", str(out), "--quiet"])
     after = {p.name: p.read_bytes() for p in out.iterdir()}
     assert after == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "small.toml"]
 
 
 def test_help_of_every_subcommand():
