@@ -614,20 +614,33 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     (:mod:`prs_geom.exports.output`; anything else raises
     :class:`~prs_geom.model.errors.OutputRefused` before any work). The job is refused up
     front when its estimated memory exceeds ``memory_budget`` (bytes; default a share of the
-    available memory, :mod:`prs_geom.mesh.budget`). ``options``: :class:`BuildOptions`. Written atomically: if any stage fails,
+    available memory, :mod:`prs_geom.mesh.budget`); a job that fits the budget only without
+    worker processes runs without them. ``options``: :class:`BuildOptions`. Written atomically: if any stage fails,
     ``out_dir`` keeps its previous content. Returns the report dict.
     """
     from prs_geom.mesh.budget import guard
 
     harmonic = isinstance(design, HarmonicDesign)
     atomic = AtomicOutputDir(out_dir, {"design": design.name})
+    workers = None
     if not harmonic:
         from prs_geom.background import default_workers
+        from prs_geom.mesh.budget import ResourceLimitError
 
-        guard(design, memory_budget, workers=default_workers())
+        workers = default_workers()
+        try:
+            guard(design, memory_budget, workers=workers)
+        except ResourceLimitError:
+            if not workers:
+                raise
+            # the workers' peaks add to the main process's: a design too large for that runs
+            # serially (one peak at a time) when it fits so, and is refused only when not
+            guard(design, memory_budget, workers=0)
+            workers = 0
     try:
         with atomic as tmp:
-            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options)
+            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,
+                             workers=workers)
             ctx.report["files"].append(REPORT_NAME)
             (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
     except OSError as exc:

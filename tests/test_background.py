@@ -63,3 +63,32 @@ def test_bad_worker_count_exits_2_and_writes_nothing(tmp_path, monkeypatch):
     code, out, err = run(["build", "--out", str(tmp_path / "x"), "--quiet"])
     assert code == 2 and "PRS_GEOM_WORKERS" in err
     assert not (tmp_path / "x").exists()
+
+
+def test_a_design_that_fits_only_serially_builds_without_workers(tmp_path, monkeypatch):
+    """The workers' memory adds to the main process's; a build whose estimate fits the
+    budget only without them runs serially instead of being refused."""
+    from prs_geom import pipeline
+    from prs_geom.mesh.budget import ResourceLimitError, estimate
+    from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
+
+    d = PRSDesign(name="small", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
+                  mesh=MeshSettings(chord_tolerance_mm=0.05))
+    serial, parallel = estimate(d).peak_bytes, estimate(d, workers=2).peak_bytes
+    assert parallel > serial
+    seen = []
+    original = pipeline.run_stages
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs.get("workers"))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "run_stages", spy)
+    monkeypatch.setenv("PRS_GEOM_WORKERS", "2")
+    pipeline.build(d, tmp_path / "a", memory_budget=int(0.5 * (serial + parallel)))
+    assert seen == [0] and (tmp_path / "a" / "report.json").exists()
+    pipeline.build(d, tmp_path / "b", memory_budget=int(1.01 * parallel))
+    assert seen == [0, 2]
+    with pytest.raises(ResourceLimitError):
+        pipeline.build(d, tmp_path / "c", memory_budget=int(0.99 * serial))
+    assert not (tmp_path / "c").exists()
