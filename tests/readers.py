@@ -86,3 +86,16 @@ def khronos_issues(glb: Path, tmp_path: Path) -> dict:
     r = subprocess.run([node, str(script), str(validator), str(glb)], capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
+
+
+def assert_xlsx_cell(got, want) -> None:
+    """A machining-sheet cell read back from the XLSX against the value written: booleans as
+    yes/no, floats to the ~16 significant digits XLSX numbers carry (Excel shows 15)."""
+    import pytest
+
+    if isinstance(want, bool):
+        assert got == ("yes" if want else "no")
+    elif isinstance(want, float):
+        assert got == pytest.approx(want, rel=1e-15, abs=1e-300)
+    else:
+        assert got == want

@@ -3,6 +3,7 @@ column titles, key row, data rows, number formats and column widths, cell by cel
 from __future__ import annotations
 
 import pytest
+from readers import assert_xlsx_cell
 
 from prs_geom.analysis.machining import COLUMNS, machining_sheets
 from prs_geom.exports.sheets import read_xlsx, write_xlsx
@@ -27,14 +28,7 @@ def test_values_read_back(workbook):
         assert len(back[part]) == len(sheet.rows)
         for got, row in zip(back[part], sheet.rows):
             for key, _, _ in COLUMNS:
-                v = row[key]
-                if isinstance(v, bool):
-                    assert got[key] == ("yes" if v else "no")
-                elif isinstance(v, float):
-                    # XLSX numbers carry ~16 significant digits (Excel shows 15)
-                    assert got[key] == pytest.approx(v, rel=1e-15, abs=1e-300)
-                else:
-                    assert got[key] == v
+                assert_xlsx_cell(got[key], row[key])
 
 
 def test_summary_styles(workbook):
