@@ -33,8 +33,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from prs_geom.model.errors import DesignError, DesignWarning
-from prs_geom.model.validation import (check_name, choice, integer, optional_positive, optional_size,
-                                       pitch_list, positive, real, size)
+from prs_geom.model.validation import (bounded, check_name, choice, integer, optional_positive,
+                                       optional_size, pitch_list, positive, real, size)
 
 #: Installation types of docs/theory/loads.md.
 INSTALLATIONS = ("tension-compression", "compression-compression")
@@ -83,11 +83,8 @@ class Thread:
 
     def __post_init__(self) -> None:
         _set(self, "pitch_mm", size("pitch_mm", self.pitch_mm))
-        beta = real("flank_half_angle_deg", self.flank_half_angle_deg)
-        if not 10.0 <= beta <= 80.0:
-            raise DesignError("flank_half_angle_deg", self.flank_half_angle_deg,
-                              "must be between 10 and 80 degrees")
-        _set(self, "flank_half_angle_deg", beta)
+        _set(self, "flank_half_angle_deg", bounded("flank_half_angle_deg", self.flank_half_angle_deg, 10.0, 80.0,
+                                                   "must be between 10 and 80 degrees"))
         choice("hand", self.hand, HANDS)
         integer("engaged_teeth", self.engaged_teeth, 2, 500)
 
@@ -183,23 +180,17 @@ class Material:
     thermal_expansion_per_k: float = 11.5e-6
 
     def __post_init__(self) -> None:
-        e = positive("youngs_modulus_mpa", self.youngs_modulus_mpa)
         # engineering solids span about 1 GPa (polymers) to 1.2 TPa (diamond); far outside,
         # the tooth compliances vanish or explode and the load system loses its conditioning
-        if not 1e3 <= e <= 1e7:
-            raise DesignError("youngs_modulus_mpa", self.youngs_modulus_mpa,
-                              "must be from 1e3 to 1e7 MPa (1 GPa to 10 TPa)")
-        _set(self, "youngs_modulus_mpa", e)
+        _set(self, "youngs_modulus_mpa", bounded("youngs_modulus_mpa", self.youngs_modulus_mpa, 1e3, 1e7,
+                                                 "must be from 1e3 to 1e7 MPa (1 GPa to 10 TPa)", positive))
         nu = real("poisson_ratio", self.poisson_ratio)
         if not 0.0 <= nu < 0.5:
             raise DesignError("poisson_ratio", self.poisson_ratio, "must be in [0, 0.5)")
         _set(self, "poisson_ratio", nu)
-        alpha = real("thermal_expansion_per_k", self.thermal_expansion_per_k)
         # engineering metals and polymers lie between about 0.5e-6 (Invar) and 2e-4 1/K
-        if not 0.0 <= alpha <= 1e-3:
-            raise DesignError("thermal_expansion_per_k", self.thermal_expansion_per_k,
-                              "must be in [0, 0.001] 1/K (steel: 11.5e-6)")
-        _set(self, "thermal_expansion_per_k", alpha)
+        _set(self, "thermal_expansion_per_k", bounded("thermal_expansion_per_k", self.thermal_expansion_per_k,
+                                                      0.0, 1e-3, "must be in [0, 0.001] 1/K (steel: 11.5e-6)"))
 
 
 @dataclass(frozen=True)
@@ -264,10 +255,7 @@ FLANK_FIELDS = ("screw_flank_um", "roller_screw_flank_um", "roller_nut_flank_um"
 
 
 def _tolerance(fld: str, value: Any, hi: float = MAX_TOLERANCE_UM) -> float:
-    v = real(fld, value)
-    if not 0.0 <= v <= hi:
-        raise DesignError(fld, value, f"must be in [0, {hi:g}]")
-    return v
+    return bounded(fld, value, 0.0, hi, f"must be in [0, {hi:g}]")
 
 
 @dataclass(frozen=True)
@@ -380,14 +368,9 @@ class ContactSettings:
     precision_mm: float = 1e-10
 
     def __post_init__(self) -> None:
-        c = real("clearance_mm", self.clearance_mm)
-        if not 0.0 <= c <= 0.1:
-            raise DesignError("clearance_mm", self.clearance_mm, "must be in [0, 0.1] mm")
-        _set(self, "clearance_mm", c)
-        prec = positive("precision_mm", self.precision_mm)
-        if not 1e-13 <= prec <= 1e-4:
-            raise DesignError("precision_mm", self.precision_mm, "must be in [1e-13, 1e-4] mm")
-        _set(self, "precision_mm", prec)
+        _set(self, "clearance_mm", bounded("clearance_mm", self.clearance_mm, 0.0, 0.1, "must be in [0, 0.1] mm"))
+        _set(self, "precision_mm", bounded("precision_mm", self.precision_mm, 1e-13, 1e-4,
+                                           "must be in [1e-13, 1e-4] mm", positive))
 
 
 @dataclass(frozen=True)
@@ -401,11 +384,8 @@ class MeshSettings:
     chord_tolerance_mm: float = 0.01
 
     def __post_init__(self) -> None:
-        tol = positive("chord_tolerance_mm", self.chord_tolerance_mm)
-        if not 1e-4 <= tol <= 0.1:
-            raise DesignError("chord_tolerance_mm", self.chord_tolerance_mm,
-                              "must be from 0.0001 mm (0.1 um) to 0.1 mm")
-        _set(self, "chord_tolerance_mm", tol)
+        _set(self, "chord_tolerance_mm", bounded("chord_tolerance_mm", self.chord_tolerance_mm, 1e-4, 0.1,
+                                                 "must be from 0.0001 mm (0.1 um) to 0.1 mm", positive))
 
 
 @dataclass(frozen=True)
@@ -432,14 +412,9 @@ class GearSettings:
         if not isinstance(self.enabled, bool):
             raise DesignError("enabled", self.enabled, "must be true or false")
         _set(self, "module_mm", optional_size("module_mm", self.module_mm))
-        a = real("pressure_angle_deg", self.pressure_angle_deg)
-        if not 14.5 <= a <= 30.0:
-            raise DesignError("pressure_angle_deg", self.pressure_angle_deg, "must be from 14.5 to 30 deg")
-        _set(self, "pressure_angle_deg", a)
-        j = real("backlash_mm", self.backlash_mm)
-        if not 0.0 <= j <= 1.0:
-            raise DesignError("backlash_mm", self.backlash_mm, "must be from 0 to 1 mm")
-        _set(self, "backlash_mm", j)
+        _set(self, "pressure_angle_deg", bounded("pressure_angle_deg", self.pressure_angle_deg, 14.5, 30.0,
+                                                 "must be from 14.5 to 30 deg"))
+        _set(self, "backlash_mm", bounded("backlash_mm", self.backlash_mm, 0.0, 1.0, "must be from 0 to 1 mm"))
         _set(self, "face_width_mm", optional_size("face_width_mm", self.face_width_mm))
 
 
@@ -471,10 +446,8 @@ class Supports:
         _set(self, "unsupported_length_mm", optional_size("unsupported_length_mm", self.unsupported_length_mm))
         choice("critical_speed_ends", self.critical_speed_ends, END_SUPPORTS)
         choice("buckling_ends", self.buckling_ends, END_SUPPORTS)
-        s = real("buckling_safety", self.buckling_safety)
-        if not 1.0 <= s <= 20.0:
-            raise DesignError("buckling_safety", self.buckling_safety, "must be from 1 to 20")
-        _set(self, "buckling_safety", s)
+        _set(self, "buckling_safety", bounded("buckling_safety", self.buckling_safety, 1.0, 20.0,
+                                              "must be from 1 to 20"))
         f = real("critical_speed_factor", self.critical_speed_factor)
         if not 0.0 < f <= 1.0:
             raise DesignError("critical_speed_factor", self.critical_speed_factor, "must be in (0, 1]")
@@ -512,37 +485,22 @@ class RatingSettings:
     dn_limit_mm_rpm: float = 150_000.0
 
     def __post_init__(self) -> None:
-        mu = real("friction_coefficient", self.friction_coefficient)
-        if not 0.0 <= mu <= 0.5:
-            raise DesignError("friction_coefficient", self.friction_coefficient, "must be in [0, 0.5]")
-        _set(self, "friction_coefficient", mu)
-        n = positive("speed_rpm", self.speed_rpm)
-        if n > 1e5:
-            raise DesignError("speed_rpm", self.speed_rpm, "must be at most 100000 rpm")
-        _set(self, "speed_rpm", n)
-        h = positive("life_hours", self.life_hours)
-        if h > 1e7:
-            raise DesignError("life_hours", self.life_hours, "must be at most 1e7 hours")
-        _set(self, "life_hours", h)
-        r = real("reliability_pct", self.reliability_pct)
-        if not RELIABILITY_RANGE[0] <= r <= RELIABILITY_RANGE[1]:
-            raise DesignError("reliability_pct", self.reliability_pct,
-                              "must be from 90 to 99 % (the range of the a_1 table of ISO 3408-5 / ISO 281:1990)")
-        _set(self, "reliability_pct", r)
-        fw = real("operating_factor", self.operating_factor)
-        if not 1.0 <= fw <= 5.0:
-            raise DesignError("operating_factor", self.operating_factor, "must be from 1 to 5")
-        _set(self, "operating_factor", fw)
-        p = real("static_pressure_limit_mpa", self.static_pressure_limit_mpa)
-        if not 1000.0 <= p <= 6000.0:
-            raise DesignError("static_pressure_limit_mpa", self.static_pressure_limit_mpa,
-                              "must be from 1000 to 6000 MPa (hardened steel: 4000 to 4200)")
-        _set(self, "static_pressure_limit_mpa", p)
+        _set(self, "friction_coefficient", bounded("friction_coefficient", self.friction_coefficient, 0.0, 0.5,
+                                                   "must be in [0, 0.5]"))
+        _set(self, "speed_rpm", bounded("speed_rpm", self.speed_rpm, 0.0, 1e5, "must be at most 100000 rpm", positive))
+        _set(self, "life_hours", bounded("life_hours", self.life_hours, 0.0, 1e7, "must be at most 1e7 hours",
+                                         positive))
+        _set(self, "reliability_pct", bounded(
+            "reliability_pct", self.reliability_pct, *RELIABILITY_RANGE,
+            "must be from 90 to 99 % (the range of the a_1 table of ISO 3408-5 / ISO 281:1990)"))
+        _set(self, "operating_factor", bounded("operating_factor", self.operating_factor, 1.0, 5.0,
+                                               "must be from 1 to 5"))
+        _set(self, "static_pressure_limit_mpa", bounded(
+            "static_pressure_limit_mpa", self.static_pressure_limit_mpa, 1000.0, 6000.0,
+            "must be from 1000 to 6000 MPa (hardened steel: 4000 to 4200)"))
         _set(self, "preload_n", optional_positive("preload_n", self.preload_n))
-        dn = positive("dn_limit_mm_rpm", self.dn_limit_mm_rpm)
-        if dn > 1e7:
-            raise DesignError("dn_limit_mm_rpm", self.dn_limit_mm_rpm, "must be at most 1e7 mm/min")
-        _set(self, "dn_limit_mm_rpm", dn)
+        _set(self, "dn_limit_mm_rpm", bounded("dn_limit_mm_rpm", self.dn_limit_mm_rpm, 0.0, 1e7,
+                                              "must be at most 1e7 mm/min", positive))
 
 
 # --------------------------------------------------------------------------- assembly

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from typing import Any, Callable
 
 from prs_geom.model.errors import DesignError, format_value
 
@@ -35,6 +35,16 @@ def positive(fld: str, value: Any) -> float:
     v = real(fld, value)
     if v <= 0.0:
         raise DesignError(fld, value, "must be > 0")
+    return v
+
+
+def bounded(fld: str, value: Any, lo: float, hi: float, rule: str,
+            number: Callable[[str, Any], float] = real) -> float:
+    """``number(fld, value)`` (a finite number, by default) in the closed range [lo, hi];
+    ``rule`` is the message when it is outside."""
+    v = number(fld, value)
+    if not lo <= v <= hi:
+        raise DesignError(fld, value, rule)
     return v
 
 
