@@ -128,6 +128,7 @@ class BuildOptions:
 class _Pending:
     """A place in the report's file list kept for a background job's files."""
 
+    #: the stage whose job writes the files
     job: str
 
 
@@ -151,7 +152,8 @@ class BuildContext:
     plots_svg: dict[str, str] = field(default_factory=dict)
     #: worker processes for the checks, drawings and plots (None: all in this process)
     background: "Background | None" = None
-    #: background jobs by stage name, taken by the stage at its place in the run
+    #: background jobs by the stage whose result they are (``checks``, ``meshes``: the mesh
+    #: checks, ``manufacturing``: the drawings, ``loads``/``rating``/``tolerance``: their plots)
     jobs: dict[str, "Job"] = field(default_factory=dict)
     #: the stages of this run (name, function): a job is started only for a stage that will run
     stages: list[tuple[str, Any]] = field(default_factory=list)
@@ -162,36 +164,40 @@ class BuildContext:
     #: the stage running now
     current_stage: str = ""
 
-    def submit(self, name: str, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
-        """Start ``fn(*args, **kwargs)`` for the stage ``name`` in a worker process when the
-        build has them; else it runs when the stage takes it (:meth:`take`)."""
+    def runs(self, stage: str) -> bool:
+        """Whether ``stage`` is one of this run's stages."""
+        return any(name == stage for name, _ in self.stages)
+
+    def submit(self, stage: str, fn: Callable[..., Any], *args: Any, progress: bool = False, **kwargs: Any) -> None:
+        """Start ``fn(*args, **kwargs)``, the background work of ``stage``, in a worker process
+        when the build has them; else it runs in this process when taken (:meth:`take`), and
+        ``progress=True`` hands it this build's progress callback (a worker reports none)."""
         from prs_geom.background import Background
 
         bg = self.background if self.background is not None else Background(0)
-        self.jobs[name] = bg.submit(fn, *args, **kwargs)
+        if progress and not bg.workers:
+            kwargs["progress"] = self.progress
+        self.jobs[stage] = bg.submit(fn, *args, **kwargs)
 
-    def take(self, name: str) -> Any:
-        """The result of the job ``name`` (waits for it). The job's own time is booked to the
-        stage that started it (``plot:loads`` to ``loads``), the wait is not booked to the
-        stage running now."""
-        job = self.jobs.pop(name)
+    def take(self, stage: str) -> Any:
+        """The result of the background work of ``stage`` (waits for it). Its time is booked
+        to ``stage``; the wait is not booked to the stage running now."""
+        job = self.jobs.pop(stage)
         t0 = time.perf_counter()
         value = job.result()
         waited = time.perf_counter() - t0
-        owner = name.split(":", 1)[1] if name.startswith("plot:") else {"mesh_checks": "meshes"}.get(name, name)
-        self.worker_seconds[owner] = self.worker_seconds.get(owner, 0.0) + job.seconds
+        self.worker_seconds[stage] = self.worker_seconds.get(stage, 0.0) + job.seconds
         self.waited[self.current_stage] = self.waited.get(self.current_stage, 0.0) + waited
         return value
 
-    def add_plot(self, name: str, plot: Callable[..., list[str]], *args: Any) -> None:
-        """Draw a figure of :mod:`prs_geom.exports.plots` (in a worker when there are any);
-        its files keep their place in the report's file list, its SVG text goes to
-        ``plots_svg`` when :meth:`collect_plots` runs."""
+    def add_plot(self, stage: str, plot: Callable[..., list[str]], *args: Any) -> None:
+        """Draw the figure of ``stage`` with a plot function of :mod:`prs_geom.exports.plots`
+        (in a worker when there are any); its files keep their place in the report's file
+        list, its SVG text goes to ``plots_svg`` when :meth:`collect_plots` runs."""
         from prs_geom.exports.plots import plot_detached
 
-        key = f"plot:{name}"
-        self.submit(key, plot_detached, plot, *args)
-        self.report["files"].append(_Pending(key))
+        self.submit(stage, plot_detached, plot, *args)
+        self.report["files"].append(_Pending(stage))
 
     def collect_plots(self) -> None:
         """Wait for the plots still drawing; put their files and SVG texts in place."""
@@ -241,9 +247,9 @@ def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
     ctx.contact = analyse_contact(ctx.design)
     ctx.report["contact"] = ctx.contact.report()
-    if any(name == "checks" for name, _ in ctx.stages):
-        ctx.submit("checks", checks_job, ctx.design, ctx.contact)
-    if any(name == "manufacturing" for name, _ in ctx.stages):
+    if ctx.runs("checks"):
+        ctx.submit("checks", checks_job, ctx.design, ctx.contact, progress=True)
+    if ctx.runs("manufacturing"):
         from prs_geom.exports.drawing import write_drawings
 
         ctx.submit("manufacturing", write_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
@@ -352,8 +358,8 @@ def stage_meshes(ctx: BuildContext) -> None:
     d = ctx.design
     # the screw of every export is the theoretical one (the state the analysis certifies)
     asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
-    if any(name == "checks" for name, _ in ctx.stages) and ctx.background is not None and ctx.background.workers:
-        ctx.submit("mesh_checks", mesh_checks_job, d, asm.parts)
+    if ctx.runs("checks"):
+        ctx.submit("meshes", mesh_checks_job, d, asm.parts, progress=True)
         ctx.meshes = MeshStage(asm, [])
     else:
         rows = mesh_checks_job(d, asm.parts, ctx.progress)
@@ -402,16 +408,13 @@ def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn =
 
 
 def stage_checks(ctx: BuildContext) -> None:
-    """The checks of :func:`checks_job` (started after the contact stage, or run here), after
-    the mesh checks of the meshes stage when they ran in a worker."""
-    if "mesh_checks" in ctx.jobs:
-        rows = ctx.take("mesh_checks")
+    """The mesh checks started by the meshes stage (when it ran), then the checks of
+    :func:`checks_job` started after the contact stage."""
+    if "meshes" in ctx.jobs:
+        rows = ctx.take("meshes")
         ctx.meshes = MeshStage(ctx.meshes.assembly, rows)
         ctx.report["checks"]["meshes"] = rows
-    if "checks" in ctx.jobs:
-        ctx.report["checks"].update(ctx.take("checks"))
-    else:
-        ctx.report["checks"].update(checks_job(ctx.design, ctx.contact, ctx.progress))
+    ctx.report["checks"].update(ctx.take("checks"))
     ctx.report["warnings"] += check_warnings(ctx.report)
 
 
@@ -448,12 +451,7 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
-    if "manufacturing" in ctx.jobs:  # the drawings, started after the contact stage
-        ctx.report["files"] += ctx.take("manufacturing")
-    else:
-        from prs_geom.exports.drawing import write_drawings
-
-        ctx.report["files"] += write_drawings(ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
+    ctx.report["files"] += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
 
 def stage_html(ctx: BuildContext) -> None:

@@ -6,7 +6,7 @@
   when asked (``prs-geom build --screw nominal``).
 * ``assembly.stl``: the assembly in the screw frame, for a quick look; the parts of each
   rigid body (the nut and its ring gears, each roller and its gears) united by
-  :func:`rigid_body_arrays`, so that faces touching face to face share no edges and every
+  :func:`rigid_body_pieces`, so that faces touching face to face share no edges and every
   edge of the file bounds exactly two triangles. It is a multi-body file: STL has no notion
   of parts, so the shells arrive in one triangle list (CAD users take the GLB, 3MF or
   per-part STLs).
@@ -89,16 +89,6 @@ def write_stl(mesh, path: Path, header: str = "") -> None:
 
 def stl_header(part: str, design_hash: str, frame: str = "part frame") -> str:
     return f"prs_geom {part}; units mm; {frame}; design sha256 {design_hash}"[:80]
-
-
-def rigid_body_arrays(asm: Assembly) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Vertices and faces of the assembly, :func:`rigid_body_pieces` concatenated."""
-    Vs, Fs, v0 = [], [], 0
-    for V, F in rigid_body_pieces(asm):
-        Vs.append(V)
-        Fs.append(F + v0)
-        v0 += len(V)
-    return np.concatenate(Vs), np.concatenate(Fs)
 
 
 def rigid_body_pieces(asm: Assembly) -> Iterator[tuple[NDArray[np.float64], NDArray[np.int64]]]:
