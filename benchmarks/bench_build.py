@@ -46,20 +46,29 @@ CHILD = ("import resource, sys\n"
          "sys.exit(code)\n")
 
 
-#: Meshes the default assembly at chord tolerance argv[1] (mm), writes its mesh exports to
-#: argv[2] and prints its peak RSS (kB).
+#: Runs :func:`mesh_job` at chord tolerance argv[1] (mm) into the new folder argv[2] and
+#: prints its peak RSS (kB).
 MESH_CHILD = ("import resource, sys\n"
+              f"sys.path.insert(0, {str(HERE)!r})\n"
               "from pathlib import Path\n"
-              "from prs_geom.analysis.contact import theoretical_screw\n"
-              "from prs_geom.exports.meshes import export_meshes\n"
-              "from prs_geom.mesh.assembly import build_assembly\n"
-              "from prs_geom.model.design import default_design\n"
-              "from prs_geom.model.io import design_hash\n"
-              "d = default_design()\n"
+              "from bench_build import mesh_job\n"
               "out = Path(sys.argv[2]); out.mkdir()\n"
-              "asm = build_assembly(d, tol=float(sys.argv[1]), screw_profile=theoretical_screw(d).profile)\n"
-              "export_meshes(asm, out, design_hash(d), None)\n"
+              "mesh_job(float(sys.argv[1]), out)\n"
               "print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, 0, file=sys.stderr)\n")
+
+
+def mesh_job(tol: float | None, out: Path) -> None:
+    """The baseline job: mesh the default assembly (theoretical screw, chord tolerance
+    ``tol`` mm, the design's when None) and write its mesh exports into ``out``."""
+    from prs_geom.analysis.contact import theoretical_screw
+    from prs_geom.exports.meshes import export_meshes
+    from prs_geom.mesh.assembly import build_assembly
+    from prs_geom.model.design import default_design
+    from prs_geom.model.io import design_hash
+
+    d = default_design()
+    asm = build_assembly(d, tol=tol, screw_profile=theoretical_screw(d).profile)
+    export_meshes(asm, out, design_hash(d), None)
 
 
 def run_child(argv: list[str], code: str = CHILD) -> tuple[float, int]:
@@ -87,25 +96,17 @@ def best_child(argv: list[str], repeats: int, out: Path | None = None, code: str
 
 
 def baseline_meshing_and_writing(tmp: Path, repeats: int) -> float:
-    """Seconds to mesh the default assembly and write its mesh exports, best of ``repeats``."""
-    from prs_geom.analysis.contact import theoretical_screw
-    from prs_geom.exports.meshes import export_meshes
-    from prs_geom.mesh.assembly import build_assembly
-    from prs_geom.model.design import default_design
-    from prs_geom.model.io import design_hash
-
-    d = default_design()
-    screw = theoretical_screw(d).profile
+    """Seconds of :func:`mesh_job` at the design's tolerance, best of ``repeats`` (imports
+    and caches warmed by a first run outside the timing)."""
     folder = tmp / "baseline"
 
     def job() -> None:
         if folder.exists():
             shutil.rmtree(folder)
         folder.mkdir()
-        asm = build_assembly(d, screw_profile=screw)
-        export_meshes(asm, folder, design_hash(d), None)
+        mesh_job(None, folder)
 
-    job()  # imports and caches outside the timing
+    job()
     return best_time(job, repeats)
 
 
