@@ -623,9 +623,13 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     workers = None
     if not harmonic:
         from prs_geom.background import default_workers
-        from prs_geom.mesh.budget import ResourceLimitError
+        from prs_geom.mesh.budget import ResourceLimitError, check_windows
 
         workers = default_workers()
+        if check_windows(design) is not None:
+            # a long design's check runs window by window to bound memory; beside the export
+            # meshing in a worker its peak would add to the main process's again
+            workers = 0
         try:
             guard(design, memory_budget, workers=workers)
         except ResourceLimitError:

@@ -374,3 +374,15 @@ def test_mesh_report_warns_when_the_deviation_exceeds_the_tolerance():
     # every region over the tolerance is named, nothing under it
     over = {k for k, v in row["deviation_mm"].items() if v > 0.002}
     assert len(row["warnings"]) == len(over)
+
+
+def test_deviation_in_chunks_equals_deviation_at_once(monkeypatch):
+    """measure_deviation samples large meshes in chunks to bound memory; the result is the
+    same to the bit (every distance is per point)."""
+    import prs_geom.mesh.thread as thread
+
+    tm = build_part(default_design(), "nut", 0.01)
+    whole = thread.measure_deviation(tm)
+    monkeypatch.setattr(thread, "DEVIATION_CHUNK_FACES", 997)
+    assert len(tm.faces) > 10 * 997
+    assert thread.measure_deviation(tm) == whole

@@ -24,33 +24,52 @@ from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, part_chord_toleranc
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
 
+def part_z_range(design: PRSDesign, part: str) -> tuple[float, float]:
+    """Axial extent (mm) of a part's thread in its own frame: the screw centred on the
+    engaged length (:func:`~prs_geom.geometry.frames.screw_z_range`), roller and nut over it."""
+    if part == "screw":
+        return screw_z_range(design)
+    if part in ("roller", "nut"):
+        return 0.0, thread_length(design)
+    raise ValueError(f"unknown part {part!r}")
+
+
 def build_part(design: PRSDesign, part: str, tol: float | None = None,
                profiles: ThreadProfiles | None = None,
-               screw_profile: ThreadProfile | None = None) -> ThreadMesh:
+               screw_profile: ThreadProfile | None = None,
+               z_window: tuple[float, float] | None = None) -> ThreadMesh | None:
     """Mesh of one part in its own frame, with its angular datum mark cut into face A
     (the end face at the part's lower z, :mod:`prs_geom.geometry.datum`), at ``tol`` or
     finer for a small part (:func:`~prs_geom.mesh.thread.part_chord_tolerance`).
 
     ``screw_profile`` replaces the design's screw profile (e.g. with the corrected pitch
     diameter of the contact analysis).
+
+    ``z_window``: mesh only the part's piece between these planes (part frame, mm), closed
+    by end faces on them; None when the part does not reach into the window. The datum mark
+    is cut only when the piece starts at the part's own face A. Columns and strands are
+    those of the whole part (they depend on the profile and the tolerance, not on the end
+    planes), so away from its end faces the piece is the whole part's surface.
     """
     tol = tol or design.mesh.chord_tolerance_mm
     prof = profiles or ThreadProfiles.from_design(design)
     p = design.thread.pitch_mm
     warps = part_warps(design)
     first_mid = FIRST_MID_PITCHES[part] * p
+    lo, hi = part_z_range(design, part)
+    z_lo, z_hi = (lo, hi) if z_window is None else (max(lo, z_window[0]), min(hi, z_window[1]))
+    if z_hi <= z_lo:
+        return None
     if part == "screw":
-        lo, hi = screw_z_range(design)
         profile = screw_profile or prof.screw
-        tm = thread_mesh(profile, lo, hi, part_chord_tolerance(profile, tol), first_mid, warps["screw"])
+        tm = thread_mesh(profile, z_lo, z_hi, part_chord_tolerance(profile, tol), first_mid, warps["screw"])
     elif part == "roller":
-        tm = thread_mesh(prof.roller, 0.0, thread_length(design), part_chord_tolerance(prof.roller, tol),
-                         first_mid, warps["roller"])
-    elif part == "nut":
-        tm = thread_mesh(prof.nut, 0.0, thread_length(design), part_chord_tolerance(prof.nut, tol), first_mid,
-                         warps["nut"], body_radius=0.5 * design.nut.outer_diameter_mm)
+        tm = thread_mesh(prof.roller, z_lo, z_hi, part_chord_tolerance(prof.roller, tol), first_mid, warps["roller"])
     else:
-        raise ValueError(f"unknown part {part!r}")
+        tm = thread_mesh(prof.nut, z_lo, z_hi, part_chord_tolerance(prof.nut, tol), first_mid,
+                         warps["nut"], body_radius=0.5 * design.nut.outer_diameter_mm)
+    if z_lo != lo:
+        return tm
     return cut_datum_mark(tm, datum_mark(tm.profile, tm.z_lo, tm.body_radius))
 
 
@@ -161,7 +180,8 @@ class Assembly:
         V, F = self.combined_arrays()
         return trimesh.Trimesh(V, F, process=False, validate=False)
 
-    def rigid_body(self, name: str) -> str:
+    @staticmethod
+    def rigid_body(name: str) -> str:
         """The rigid body a scene part belongs to (gear cylinders belong to their part)."""
         return name.split("_gear")[0].replace("nut_ring", "nut")
 
@@ -192,20 +212,89 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
         parts[name] = build_part(design, name, tol, prof, screw_profile)
         progress("meshes", i + 1, 3)
     asm = Assembly(design, parts, tolerance=tol)
+    _place(asm, end_gears(design, tol, prof) if gears else None, progress)
+    return asm
+
+
+def scene_names(design: PRSDesign, gears: bool) -> list[str]:
+    """Scene part names in the order :func:`build_assembly` places them: screw, nut, the
+    ring gears (low, high), then each roller followed by its low and high gear."""
+    names = ["screw", "nut"] + (["nut_ring_gear_lo", "nut_ring_gear_hi"] if gears else [])
+    for k in range(design.roller.count):
+        names += [f"roller_{k}"] + ([f"roller_{k}_gear_lo", f"roller_{k}_gear_hi"] if gears else [])
+    return names
+
+
+def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progress: ProgressFn = silent,
+           gear_window: tuple[float, float] | None = None) -> None:
+    """Place ``asm.parts`` and the gears (all, or those whose z range, the same in the part
+    frames and the screw frame, meets ``gear_window``) in ``asm.placed``: screw, nut, ring
+    gears, then each roller with its gears."""
+    design = asm.design
+    parts = asm.parts
     I = np.eye(4)
-    asm.placed["screw"] = (parts["screw"].to_trimesh(), I, "thread")
-    asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
-    gear_parts = end_gears(design, tol, prof) if gears else None
-    if gear_parts is not None:
-        asm.placed["nut_ring_gear_lo"] = (gear_parts["ring_lo"], I, "gear")
-        asm.placed["nut_ring_gear_hi"] = (gear_parts["ring_hi"], I, "gear")
-    roller_tm = parts["roller"].to_trimesh()
+
+    def wanted(key: str) -> bool:
+        if gear_parts is None or key not in gear_parts:
+            return False
+        if gear_window is None:
+            return True
+        z = np.asarray(gear_parts[key].vertices)[:, 2]
+        return bool(z.max() > gear_window[0] and z.min() < gear_window[1])
+
+    if "screw" in parts:
+        asm.placed["screw"] = (parts["screw"].to_trimesh(), I, "thread")
+    if "nut" in parts:
+        asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
+    for side in ("lo", "hi"):
+        if wanted(f"ring_{side}"):
+            asm.placed[f"nut_ring_gear_{side}"] = (gear_parts[f"ring_{side}"], I, "gear")
+    roller_tm = parts["roller"].to_trimesh() if "roller" in parts else None
     z = design.roller.count
     for k in range(z):
         T = roller_transform(design, k)
-        asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
-        if gear_parts is not None:
-            asm.placed[f"roller_{k}_gear_lo"] = (gear_parts["roller_lo"], T, "gear")
-            asm.placed[f"roller_{k}_gear_hi"] = (gear_parts["roller_hi"], T, "gear")
+        if roller_tm is not None:
+            asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
+        for side in ("lo", "hi"):
+            if wanted(f"roller_{side}"):
+                asm.placed[f"roller_{k}_gear_{side}"] = (gear_parts[f"roller_{side}"], T, "gear")
         progress("placing rollers", k + 1, z)
+
+
+def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float],
+                    screw_profile: ThreadProfile | None = None,
+                    gear_parts: dict[str, trimesh.Trimesh] | None = None,
+                    reuse: Assembly | None = None) -> Assembly:
+    """The assembly's piece between the planes z = ``z_window`` (screw frame, mm): every
+    thread part meshed over that window only (:func:`build_part`), and the gears of
+    ``gear_parts`` (:func:`end_gears`, meshed once for all windows) that reach into it.
+
+    The rollers' frames differ from the screw frame by a rotation about and a shift
+    perpendicular to the axis, so one window in z is the same window in every part frame.
+    ``reuse``: a window assembly of the same design, tolerance and window whose roller,
+    nut and gears are kept (only the screw is meshed again, as in :func:`build_assembly`).
+    """
+    if reuse is not None:
+        if reuse.design != design or reuse.tolerance != tol:
+            raise ValueError("reuse needs an assembly of the same design and tolerance")
+        parts = {k: v for k, v in reuse.parts.items() if k != "screw"}
+        screw = build_part(design, "screw", tol, None, screw_profile, z_window)
+        if screw is not None:
+            parts["screw"] = screw
+        asm = Assembly(design, parts, tolerance=tol)
+        screw_tm = screw.to_trimesh() if screw is not None else None
+        for name, (mesh, T, kind) in reuse.placed.items():
+            if name != "screw":
+                asm.placed[name] = (mesh, T, kind)
+        if screw_tm is not None:
+            asm.placed = {"screw": (screw_tm, np.eye(4), "thread"), **asm.placed}
+        return asm
+    prof = ThreadProfiles.from_design(design)
+    parts = {}
+    for name in ("screw", "roller", "nut"):
+        tm = build_part(design, name, tol, prof, screw_profile, z_window)
+        if tm is not None:
+            parts[name] = tm
+    asm = Assembly(design, parts, tolerance=tol)
+    _place(asm, gear_parts, gear_window=z_window)
     return asm

@@ -5,7 +5,8 @@ The triangle count of a thread mesh follows from its tessellation
 triangles on the thread surface, plus the end faces. A build meshes the parts three
 times: at the design's chord tolerance for the exports, at ``min(tolerance, 2 um)`` for
 the interference check (which also holds an FCL BVH and a manifold3d solid of every
-distinct mesh), and at 0.1 mm for the HTML view. The peak memory is estimated from these
+distinct mesh; a design of more than :data:`CHECK_WINDOW_TEETH` teeth is checked one
+axial window at a time, :func:`check_windows`), and at 0.1 mm for the HTML view. The peak memory is estimated from these
 counts with per-triangle costs measured on this code (``benchmarks/bench_build.py`` prints
 the measured peak of builds; ``tests/test_safety.py`` checks the estimate against built
 meshes); the estimate is meant to be an upper bound within a factor of about two. A build
@@ -34,7 +35,32 @@ BYTES_PER_EXPORT_TRIANGLE = 400
 BYTES_PER_PLACED_TRIANGLE = 120
 #: Interpreter, libraries and the analysis stages (bytes).
 BASE_BYTES = 250 * 2 ** 20
+#: The interference check meshes at no coarser than this (mm), so that the overlap allowed for
+#: chordal error (2 x tolerance) stays far below the interference it must detect.
 CHECK_TOLERANCE_MM = 0.002
+#: Designs with more engaged teeth than this are checked in axial windows of at most this many
+#: teeth (:func:`check_windows`): the check meshes at 2 um hold about 12 MB per tooth with
+#: their BVHs and solids, so a whole check of 200 teeth would need 2.6 GB.
+CHECK_WINDOW_TEETH = 20
+
+
+def check_windows(design: PRSDesign) -> list[tuple[float, float]] | None:
+    """The axial slabs (screw frame, mm) a long design's interference check runs in, or None
+    for a design of at most :data:`CHECK_WINDOW_TEETH` engaged teeth (checked whole).
+
+    The engaged length is cut into ceil(n / CHECK_WINDOW_TEETH) windows of whole teeth, as
+    equal as whole teeth allow; the first and last slab run on to the screw's ends and
+    hold the end gears. The cuts lie at tooth boundaries inside the thread, away from every
+    part's end face (:func:`prs_geom.checks.interference.windowed_interference_checks`
+    trims the overlap solids at them and drops the faces the cuts make).
+    """
+    n = design.thread.engaged_teeth
+    if n <= CHECK_WINDOW_TEETH:
+        return None
+    k = math.ceil(n / CHECK_WINDOW_TEETH)
+    p = design.thread.pitch_mm
+    cuts = [round(i * n / k) * p for i in range(1, k)]
+    return list(zip([-math.inf, *cuts], [*cuts, math.inf]))
 
 
 class ResourceLimitError(PRSGeomError):
@@ -163,6 +189,10 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers
     placed = parts["screw"] + parts["nut"] + design.roller.count * parts["roller"]
     check_tol = min(tol, CHECK_TOLERANCE_MM)
     check_tri = sum(part_triangles(design, check_tol).values()) if check else 0
+    if check_windows(design) is not None:
+        # one window (plus a pitch of margin at each end) is meshed at a time; the screw
+        # is longer than the engaged length, so this share over-counts it
+        check_tri *= (CHECK_WINDOW_TEETH + 2) / design.thread.engaged_teeth
     peaks = [0.0]
     if export:
         peaks.append(export_tri * BYTES_PER_EXPORT_TRIANGLE + placed * BYTES_PER_PLACED_TRIANGLE)

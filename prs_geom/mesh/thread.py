@@ -670,22 +670,43 @@ def profile_distance(tm: ThreadMesh, theta: NDArray, r: NDArray, z: NDArray) -> 
     return best
 
 
+#: Faces sampled at once by :func:`measure_deviation`: its point arrays (7 per face) and the
+#: flank Newton's temporaries cost about 1.5 kB a face, so a chunk holds about 200 MB.
+DEVIATION_CHUNK_FACES = 2 ** 17
+
+
 def measure_deviation(tm: ThreadMesh) -> dict[str, float]:
     """Sample every face (7 points) and measure the distance to the analytic surface.
 
     Returns the largest deviation (mm) on the thread surface body, on the thread surface
     next to the end planes, on the end faces (radial overshoot of the analytic end region)
-    and on the body cylinder, plus the number of sample points.
+    and on the body cylinder, plus the number of sample points. The faces are sampled in
+    chunks of :data:`DEVIATION_CHUNK_FACES` (every distance is per point, so the maxima
+    do not depend on the chunking; only the memory does).
     """
     V = tm.vertices * (np.array([1.0, -1.0, 1.0]) if tm.profile.hand_sign < 0 else 1.0)
-    tri = V[tm.faces]                                   # (F, 3, 3)
+    out: dict[str, float] = {}
+    for start in range(0, len(tm.faces), DEVIATION_CHUNK_FACES):
+        stop = start + DEVIATION_CHUNK_FACES
+        for key, value in _deviation_chunk(tm, V, tm.faces[start:stop], tm.face_kind[start:stop]).items():
+            out[key] = out.get(key, 0) + value if key == "samples" else max(out.get(key, 0.0), value)
+    out["samples"] = int(out.get("samples", 0))
+    out["max_deviation_mm"] = max(v for k_, v in out.items() if k_.startswith("max_"))
+    return out
+
+
+def _deviation_chunk(tm: ThreadMesh, V: NDArray[np.float64], faces: NDArray[np.int64],
+                     face_kind: NDArray[np.int8]) -> dict[str, float]:
+    """:func:`measure_deviation` of the faces ``faces`` (kinds ``face_kind``) of ``tm``,
+    ``V`` its vertices mirrored to right hand; the maxima of the regions the chunk has."""
+    tri = V[faces]                                      # (F, 3, 3)
     pts = np.einsum("sk,fkd->fsd", _BARY, tri)          # (F, S, 3)
-    kind = np.repeat(tm.face_kind, len(_BARY))
+    kind = np.repeat(face_kind, len(_BARY))
     pts = pts.reshape(-1, 3)
     r = np.hypot(pts[:, 0], pts[:, 1])
     th = np.arctan2(pts[:, 1], pts[:, 0])
     z = pts[:, 2]
-    out = {"samples": int(len(pts))}
+    out: dict[str, float] = {"samples": int(len(pts))}
     thread = kind == FACE_THREAD
     d = profile_distance(tm, th[thread], r[thread], z[thread])
     zt = tri[:, :, 2]
@@ -712,11 +733,11 @@ def measure_deviation(tm: ThreadMesh) -> dict[str, float]:
         (x0, y0, _), (x1, y1, z1) = mark.box()
         P = pts[kind == FACE_MARK]
         on_plane = np.min(np.abs(np.column_stack([P[:, 0] - x0, P[:, 0] - x1, P[:, 1] - y0, P[:, 1] - y1,
-                                                  P[:, 2] - z1])), axis=1)
+                                                  P[:, 2] - z1])), axis=1, initial=np.inf)
         outside = np.max(np.column_stack([x0 - P[:, 0], P[:, 0] - x1, y0 - P[:, 1], P[:, 1] - y1,
-                                          mark.z_face - P[:, 2], P[:, 2] - z1, np.zeros(len(P))]), axis=1)
+                                          mark.z_face - P[:, 2], P[:, 2] - z1, np.zeros(len(P))]), axis=1,
+                         initial=-np.inf)
         out["max_deviation_datum_mark_mm"] = float(np.maximum(on_plane, outside).max(initial=0.0))
-    out["max_deviation_mm"] = max(v for k_, v in out.items() if k_.startswith("max_"))
     return out
 
 
