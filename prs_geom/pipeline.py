@@ -454,6 +454,38 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     ctx.report["files"] += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
 
+def stage_mechanism(ctx: BuildContext) -> None:
+    """Carriers, journals, retaining rings (placed by the meshes stage): sizes, fits, the
+    journal clearances on the meshes, the axial stack-up (``mechanism``); the kinematics of
+    the running mechanism (``kinematics``); and the parts list (``parts_list``,
+    parts_list.csv and parts_list.xlsx)."""
+    from prs_geom.exports.bom import parts_list, parts_list_csv, write_parts_list_xlsx
+    from prs_geom.geometry.mechanism import layout
+
+    d = ctx.design
+    asm = ctx.meshes.assembly
+    lay = layout(d)
+    if lay is not None:
+        from prs_geom.checks.mechanism import mechanism_section
+
+        ctx.report["mechanism"] = sec = mechanism_section(asm, lay, lay.ring.designation)
+        if not sec["passed"]:
+            failed = [c["name"] for c in sec["checks"] if not c["passed"]]
+            ctx.report["warnings"].append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
+    from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
+
+    try:
+        check_kinematic_sizing(d)
+    except ValueError:
+        pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
+    else:
+        ctx.report["kinematics"] = kinematics(d, ctx.contact).as_dict()
+    rows = parts_list(d, asm, lay.ring.designation if lay else None)
+    ctx.report["parts_list"] = [r.as_dict() for r in rows]
+    ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
+    write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())
+
+
 def stage_html(ctx: BuildContext) -> None:
     """The self-contained HTML report, from the stage results."""
     from prs_geom.exports.html import write_html
@@ -465,7 +497,8 @@ def stage_html(ctx: BuildContext) -> None:
                rating=ctx.report.get("rating"),
                tolerance=ctx.report.get("tolerance"),
                mesh_checks=ctx.meshes.checks if ctx.meshes else None,
-               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date())
+               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date(),
+               mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"))
 
 
 #: Stages in run order: (report name, function).
@@ -478,6 +511,7 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("rating", stage_rating),
     ("tolerance", stage_tolerance),
     ("meshes", stage_meshes),
+    ("mechanism", stage_mechanism),
     ("checks", stage_checks),
     ("manufacturing", stage_manufacturing),
     ("html", stage_html),

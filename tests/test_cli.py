@@ -50,6 +50,7 @@ def bad_pitch_list(n=20, p=2.0):
 
 
 #: field path -> strategy of values that break that field's own rule
+MATERIAL_PARTS = ("screw", "roller", "nut", "carrier", "retaining_ring")
 INVALID = {
     "name": st.one_of(st.just(""), st.just("a b"), st.just("../up"), st.just("-x"), st.integers()),
     "thread.pitch_mm": non_positive,
@@ -73,14 +74,18 @@ INVALID = {
     "nut.major_diameter_mm": non_positive,
     "nut.minor_diameter_mm": non_positive,
     "nut.pitch_list_mm": bad_pitch_list(),
-    **{f"materials.{part}.youngs_modulus_mpa": out_of(1e3, 1e7) for part in ("screw", "roller", "nut")},
-    **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.5, hi_open=True) for part in ("screw", "roller", "nut")},
+    **{f"materials.{part}.youngs_modulus_mpa": out_of(1e3, 1e7) for part in MATERIAL_PARTS},
+    **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.5, hi_open=True) for part in MATERIAL_PARTS},
+    **{f"materials.{part}.density_kg_m3": out_of(500.0, 25000.0) for part in MATERIAL_PARTS},
+    **{f"materials.{part}.name": st.one_of(st.just(""), st.just("   "), st.text(min_size=61, max_size=70),
+                                           st.integers(), st.floats(allow_nan=False))
+       for part in MATERIAL_PARTS},
     "loading.axial_load_n": non_positive,
     "loading.installation": bad_choice(("tension-compression", "compression-compression")),
     "contact.clearance_mm": out_of(0.0, 0.1),
     "contact.precision_mm": out_of(1e-13, 1e-4),
     "mesh.chord_tolerance_mm": out_of(1e-4, 0.1),
-    **{f"materials.{part}.thermal_expansion_per_k": out_of(0.0, 1e-3) for part in ("screw", "roller", "nut")},
+    **{f"materials.{part}.thermal_expansion_per_k": out_of(0.0, 1e-3) for part in MATERIAL_PARTS},
     "loads.tooth_width": bad_choice(("circumference-share", "ring", "contact-ellipse", "unit")),
     "gears.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
     # besides <= 0: modules that cut the default roller (d_r = 8 mm) into no whole tooth number
@@ -88,6 +93,17 @@ INVALID = {
     "gears.pressure_angle_deg": out_of(14.5, 30.0),
     "gears.backlash_mm": out_of(0.0, 1.0),
     "gears.face_width_mm": non_positive,
+    # the [mechanism] section (layout rules that need the whole design are checked at build)
+    "mechanism.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
+    "mechanism.journal_diameter_mm": non_positive,
+    "mechanism.carrier_thickness_mm": non_positive,
+    "mechanism.ring_bore_mm": non_positive,
+    **{f"mechanism.{k}": st.sampled_from(["H7", "x7/g6", "H7/g99", "", "H7/G6", 7])
+       for k in ("journal_fit", "carrier_fit")},
+    "mechanism.carrier_guidance": bad_choice(("clear", "nut")),
+    **{f"mechanism.{k}": out_of(0.0, 5.0) for k in ("carrier_radial_clearance_mm", "roller_end_play_mm",
+                                                     "ring_play_mm")},
+    "mechanism.length_tolerance": st.sampled_from(["x11", "js99", "", "H7/g6", 11]),
     # the optional [supports] and [rating] sections
     "supports.unsupported_length_mm": non_positive,
     "supports.critical_speed_ends": bad_choice(("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")),
@@ -136,6 +152,7 @@ def test_every_design_field_has_an_invalid_case():
     walk(design_to_dict(default_design()), "")
     leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
     leaves |= {"gears.module_mm", "gears.face_width_mm"}        # absent: by the sizing rule
+    leaves |= {"mechanism.journal_diameter_mm", "mechanism.carrier_thickness_mm", "mechanism.ring_bore_mm"}
     leaves |= {f"tolerances.{f.name}" for f in dataclasses.fields(Tolerances)}  # optional section
     leaves |= {f"supports.{f.name}" for f in dataclasses.fields(Supports)}      # optional section
     leaves |= {f"rating.{f.name}" for f in dataclasses.fields(RatingSettings)}  # optional section

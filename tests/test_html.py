@@ -129,3 +129,43 @@ def test_vendored_three_js_equals_the_npm_package():
         pytest.skip("the npm registry is not reachable: " + r.stderr.strip().splitlines()[-1])
     assert r.returncode == 0, r.stdout + r.stderr
     assert "equals the npm package" in r.stdout
+
+
+def test_view_runs_the_mechanism(report_html, tmp_path):
+    """report.html#play runs the animation: the viewer steps through the keys of the
+    screw revolution without a script error."""
+    r = chromium(["--dump-dom", report_html.as_uri() + "#play"], tmp_path)
+    assert r.returncode == 0, r.stderr[-2000:]
+    body = r.stdout[r.stdout.index("<body"):r.stdout.index(">", r.stdout.index("<body")) + 1]
+    assert 'data-viewer="ok"' in body and "data-errors" not in body
+    key = int(body.split('data-animation-key="')[1].split('"')[0])
+    assert 0 <= key <= 72
+
+
+def test_view_motions_are_the_kinematics(report_html):
+    """The page's motion of each body, applied to a part's rest placement, is the pose of
+    prs_geom.analysis.kinematics at every key (float32)."""
+    import base64
+    import json
+    import math
+
+    import numpy as np
+
+    from prs_geom.analysis.kinematics import poses
+    from prs_geom.geometry.frames import roller_transform
+
+    text = report_html.read_text()
+    start = text.index("id='scene-data'")
+    payload = json.loads(text[text.index(">", start) + 1:text.index("</script>", start)].replace("<\\/", "</"))
+    anim = payload["animation"]
+    d = PRSDesign(name="html", roller=Roller(count=6), mesh=MeshSettings(chord_tolerance_mm=0.02))
+    angles = 2 * math.pi * np.arange(anim["keys"]) / (anim["keys"] - 1)
+    P = poses(d, angles)
+    M = {k: np.frombuffer(base64.b64decode(v), np.float32).reshape(-1, 4, 4) for k, v in anim["motions"].items()}
+    inst = {i["name"]: i for i in payload["instances"]}
+    assert inst["retaining_ring_lo"]["motion"] == "nut" and inst["roller_2_journal_hi"]["motion"] == "roller_2"
+    np.testing.assert_allclose(M["screw"], P.screw, atol=1e-6)
+    np.testing.assert_allclose(M["nut"], P.nut, atol=1e-5)
+    for k in range(6):
+        world = M[f"roller_{k}"].astype(np.float64) @ roller_transform(d, k)
+        np.testing.assert_allclose(world, P.roller[k], atol=2e-5)

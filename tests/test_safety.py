@@ -138,8 +138,12 @@ def test_stale_temporary_folders_of_dead_processes_are_cleaned(tmp_path):
 def _start_build(tiny_file: Path, out: Path) -> subprocess.Popen:
     # the installed console script, as a user runs it
     exe = Path(sys.executable).parent / "prs-geom"
+    # SIGINT back to its default in the child: a process started with SIGINT ignored (as
+    # some pytest-xdist workers are, and every child inherits) keeps ignoring it, and
+    # Python then installs no KeyboardInterrupt handler
     return subprocess.Popen([str(exe), "build", str(tiny_file), "--out", str(out),
-                             *BUDGET], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             *BUDGET], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _wait_for_temp(parent: Path, proc: subprocess.Popen, timeout: float = 60.0) -> Path:

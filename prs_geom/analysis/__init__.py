@@ -7,8 +7,9 @@ Owns the contact points and the screw's theoretical pitch diameter
 (:mod:`~prs_geom.analysis.tolerance`), the robust pitch family
 (:mod:`~prs_geom.analysis.robust`), the finite-element tooth model
 (:mod:`~prs_geom.analysis.fe`, optional extra ``fe``), the over-wire / over-ball inspection
-values (:mod:`~prs_geom.analysis.inspection`) and the machining data
-(:mod:`~prs_geom.analysis.machining`). Pure numpy/scipy (scikit-fem for the FE): importing
+values (:mod:`~prs_geom.analysis.inspection`), the machining data
+(:mod:`~prs_geom.analysis.machining`) and the kinematics of the running mechanism
+(:mod:`~prs_geom.analysis.kinematics`). Pure numpy/scipy (scikit-fem for the FE): importing
 it loads no mesh library (trimesh, FCL, manifold3d) and does no I/O; each stage returns a
 frozen result.
 """

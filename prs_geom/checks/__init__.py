@@ -1,2 +1,3 @@
 """Checks of the meshes against the analysis: FCL distances (:mod:`~prs_geom.checks.fcl`)
-and interference of the placed parts (:mod:`~prs_geom.checks.interference`)."""
+interference of the placed parts (:mod:`~prs_geom.checks.interference`) and the fits,
+journal clearances and stack-up of the mechanism parts (:mod:`~prs_geom.checks.mechanism`)."""

@@ -299,12 +299,13 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
     """The windowed check of :func:`windowed_interference_checks` with each screw of
     ``screws`` ("corrected": ``screw_profile``, "nominal": the design's); the roller, nut and
     gear meshes of a window are shared by the screws."""
-    from prs_geom.mesh.assembly import end_gears, scene_names, window_assembly
+    from prs_geom.mesh.assembly import end_gears, mechanism_parts, scene_names, window_assembly
 
     tol = min(design.mesh.chord_tolerance_mm, CHECK_TOLERANCE_MM)
     windows = check_windows(design) or [(-np.inf, np.inf)]
     margin = design.thread.pitch_mm
     gear_parts = end_gears(design, tol)
+    mech_parts = mechanism_parts(design, tol)
     totals: dict[str, dict[tuple[str, str], _Overlap | None]] = {screw: {} for screw in screws}
     seconds = {screw: 0.0 for screw in screws}
     for i, (lo, hi) in enumerate(windows):
@@ -314,7 +315,7 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
         for screw in screws:
             t0 = time.perf_counter()
             prof = screw_profile if screw == "corrected" else None
-            piece = window_assembly(design, tol, widened, prof, gear_parts, reuse=first)
+            piece = window_assembly(design, tol, widened, prof, gear_parts, reuse=first, mech_parts=mech_parts)
             first = first or piece
             for pair, hit in pair_overlaps(piece, silent, cache, (lo, hi)).items():
                 totals[screw][pair] = _merge(totals[screw].get(pair), hit)
@@ -323,7 +324,7 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
         progress("interference windows", i + 1, len(windows))
     # every pair of the whole assembly: those never together in a window lie in different
     # slabs and cannot touch
-    names = scene_names(design, gear_parts is not None)
+    names = scene_names(design, gear_parts is not None, mech_parts is not None)
     pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]
              if Assembly.rigid_body(a) != Assembly.rigid_body(b)]
     out: dict[str, dict[str, Any]] = {}

@@ -36,7 +36,8 @@ from prs_geom.model.io import design_hash, design_to_dict
 #: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
 DISPLAY_TOLERANCE_MM = 0.1
 
-COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "gear": "#9a9aa4"}
+COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "gear": "#9a9aa4", "carrier": "#b4b4c0",
+           "retaining": "#2e2e33"}
 
 
 def _b64(a: np.ndarray) -> str:
@@ -55,9 +56,46 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM, screw_pr
                            "f": _b64(np.asarray(mesh.faces, dtype=np.uint32))})
         colour = COLOURS["gear"] if kind == "gear" else COLOURS[name.split("_")[0]]
         instances.append({"name": name, "mesh": index[id(mesh)], "T": [float(x) for x in T.ravel()],
-                          "colour": colour, "cut": name.startswith("nut")})
+                          "colour": colour, "cut": name.startswith(("nut", "carrier", "retaining"))})
     tri = sum(len(asm.placed[i["name"]][0].faces) for i in instances)
-    return {"meshes": meshes, "instances": instances, "tolerance_mm": tol, "triangles": int(tri)}
+    out = {"meshes": meshes, "instances": instances, "tolerance_mm": tol, "triangles": int(tri)}
+    motion = _motions(asm)
+    if motion is not None:
+        out["animation"], body_of = motion
+        for inst in instances:
+            inst["motion"] = body_of[inst["name"]]
+    return out
+
+
+def _motions(asm: Any) -> tuple[dict[str, Any], dict[str, str]] | None:
+    """The 3D view's animation of one screw revolution: per moving body the rigid motion
+    M(t) (world = M(t) @ rest placement) at the keys of
+    :func:`prs_geom.exports.scene.mechanism_animation` (screw, nut with its rings, carrier,
+    each roller from :func:`prs_geom.analysis.kinematics.poses`), row-major float32; and the
+    body each scene part moves with. None for a design the kinematics does not accept."""
+    from prs_geom.analysis.kinematics import check_kinematic_sizing, poses
+    from prs_geom.exports.scene import ANIMATION_PERIOD_S, ANIMATION_STEP_DEG
+    from prs_geom.geometry.frames import roller_transform
+
+    d = asm.design
+    try:
+        check_kinematic_sizing(d)
+    except ValueError:
+        return None
+    n = int(round(360.0 / ANIMATION_STEP_DEG))
+    angles = 2.0 * np.pi * np.arange(n + 1) / n
+    P = poses(d, angles)
+    motions = {"screw": P.screw, "nut": P.nut, "carrier": P.carrier}
+    for k in range(d.roller.count):
+        motions[f"roller_{k}"] = P.roller[k] @ np.linalg.inv(roller_transform(d, k))
+    body_of = {}
+    for name in asm.placed:
+        body = asm.rigid_body(name)
+        body_of[name] = ("nut" if body.startswith("retaining_ring") else
+                         "carrier" if body.startswith("carrier") else body)
+    anim = {"period_s": ANIMATION_PERIOD_S, "keys": n + 1,
+            "motions": {k: _b64(np.asarray(v, dtype=np.float32).reshape(len(angles), 16)) for k, v in motions.items()}}
+    return anim, body_of
 
 
 
@@ -143,7 +181,9 @@ def page_head(title: str, version: str, date: str, design_sha: str, conventions:
             if warnings else "<p id='warnings' class='note'>Warnings: none.</p>",
             "<div id='errors'></div>",
             "<h2>Assembly</h2><canvas id='view' width='900' height='560'></canvas><div id='viewinfo' class='note'></div>"
-            f"<label class='note'><input type='checkbox' id='cutaway' checked> {cut_label}</label>"]
+            f"<label class='note'><input type='checkbox' id='cutaway' checked> {cut_label}</label>"
+            "<label class='note' id='play-label' hidden><input type='checkbox' id='play'> run the mechanism "
+            "(one screw revolution, repeated)</label>"]
 
 
 def svg_element(text: str) -> str:
@@ -287,13 +327,51 @@ def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     return "".join(out)
 
 
+def _mechanism_html(m: dict[str, Any]) -> str:
+    """Carriers, journals, retaining rings: the checks with pass/fail, the fits, the journal
+    clearances measured on the meshes and the axial stack-up."""
+    def verdict(ok: bool) -> str:
+        return "pass" if ok else "FAIL"
+
+    out = ["<h2 id='mechanism'>Mechanism: carriers, journals, retaining rings</h2>"]
+    out.append(_table([[c["name"], verdict(c["passed"])] for c in m["checks"]], ["check", "result"]))
+    ring = m["retaining_ring"]
+    out.append(_table([["roller journal diameter (mm)", m["journal_diameter_mm"]],
+                       ["carrier inner / outer diameter (mm)",
+                        f"{m['carrier']['inner_diameter_mm']:.4f} / {m['carrier']['outer_diameter_mm']:.4f}"],
+                       ["carrier thickness (mm)", m["carrier"]["thickness_mm"]],
+                       ["retaining ring", ring["designation"]],
+                       ["groove diameter d2 / width m / edge distance n (mm)",
+                        f"{ring['groove_diameter_mm']:g} / {ring['groove_width_mm']:g} / {ring['edge_distance_mm']:g}"],
+                       ["nut end bore (mm)", m["nut_end"]["bore_diameter_mm"]]]))
+    out.append(_table([[f["feature"], f["fit"], f["nominal_diameter_mm"], f["min_clearance_mm"] * 1e3,
+                        f["max_clearance_mm"] * 1e3, f["modelled_clearance_mm"] * 1e3, verdict(f["passed"])]
+                       for f in m["fits"]],
+                      ["fit", "ISO 286", "nominal (mm)", "min clearance (um)", "max clearance (um)",
+                       "modelled (um)", "result"]))
+    js = m["journal_clearances"]
+    out.append(_table([[r["roller"], r["end"], r["fcl_clearance_mm"] * 1e3, r["fit_radial_range_mm"][0] * 1e3,
+                        r["fit_radial_range_mm"][1] * 1e3, verdict(r["passed"])] for r in js],
+                      ["roller", "end", "FCL radial clearance (um)", "fit min (um)", "fit max (um)", "result"],
+                      full=True))
+    st = m["stack_up"]
+    out.append(_table([[d["name"], d["count"], "+" if d["sense"] > 0 else "-", d["nominal_mm"],
+                        d["lower_deviation_mm"], d["upper_deviation_mm"]] for d in st["chain"]],
+                      ["axial stack-up", "count", "sense", "nominal (mm)", "lower dev. (mm)", "upper dev. (mm)"]))
+    out.append(f"<p class='note'>axial play of carriers and rollers between the rings: nominal "
+               f"{st['nominal_play_mm']:.4f} mm, worst case {st['min_play_mm']:.4f} to {st['max_play_mm']:.4f} mm "
+               f"({verdict(st['passed'])}).</p>")
+    return "".join(out)
+
+
 def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                contact: ContactResult | None = None, loads: LoadsResult | None = None,
                plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
                mesh_checks: list[dict[str, Any]] | None = None,
                tolerance: dict[str, Any] | None = None, checks: dict[str, Any] | None = None,
                inspection: dict[str, Any] | None = None, date: str = "",
-               rating: dict[str, Any] | None = None) -> None:
+               rating: dict[str, Any] | None = None, mechanism: dict[str, Any] | None = None,
+               parts_list: list[dict[str, Any]] | None = None) -> None:
     """Write ``report.html`` from the stage results of a build.
 
     ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
@@ -334,6 +412,16 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
         parts.append(_tolerance_html(tolerance, plots_svg or {}))
     if checks:
         parts.append(_checks_html(checks, contact))
+    if mechanism:
+        parts.append(_mechanism_html(mechanism))
+    if parts_list:
+        from prs_geom.exports.bom import COLUMNS as BOM_COLUMNS
+
+        parts.append("<h2 id='parts-list'>Parts list</h2>" + _table(
+            [[r[k] for k, _, _ in BOM_COLUMNS] for r in parts_list],
+            [f"{t} ({u})" if u else t for _, t, u in BOM_COLUMNS], full=True)
+            + f"<p class='note'>total mass {sum(r['total_mass_kg'] for r in parts_list):.4f} kg; "
+            "item numbers are the balloons of the assembly drawing; volumes from the meshes.</p>")
     if inspection:
         keys = ["gauge", "pitch_diameter_mm", "lead_angle_deg", "gauge_diameter_mm", "measurement_mm",
                 "measurement_correction_um", "numerical_check_um", "temperature_coefficient_um_per_k"]

@@ -149,7 +149,7 @@ def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None
                      stl_header("assembly, multi-body", design_hash, "screw frame"))
     files["assembly.stl"] = ("the assembly in the screw frame, parts of each rigid body united; multi-body "
                              "binary STL (mm), for viewing")
-    scene = assembly_scene(asm, asm.design.name)
+    scene = assembly_scene(asm, asm.design.name, animate=True)
     write_glb(scene, out / "assembly.glb")
     files["assembly.glb"] = "glTF 2.0 binary: one named node per part and roller, metres, +Y up, PBR materials"
     write_3mf(scene, out / "assembly.3mf")

@@ -95,6 +95,17 @@ class SceneNode:
 
 
 @dataclass(frozen=True, eq=False)
+class SceneAnimation:
+    """Keyframes of named nodes: at ``times_s`` (K,) each animated node's local rotation
+    (K, 4) unit quaternions (x, y, z, w) and/or translation (K, 3) mm, relative to its
+    parent, interpolated linearly (spherically for rotations) between keys."""
+
+    name: str
+    times_s: NDArray[np.float64]
+    channels: dict[str, dict[str, NDArray[np.float64]]]
+
+
+@dataclass(frozen=True, eq=False)
 class Scene:
     """Meshes and materials by name, and the root nodes (screw frame, z up, mm)."""
 
@@ -102,6 +113,7 @@ class Scene:
     materials: dict[str, Material]
     nodes: tuple[SceneNode, ...]
     title: str = ""
+    animations: tuple[SceneAnimation, ...] = ()
 
     def placed(self) -> list[tuple[str, SceneMesh, NDArray[np.float64]]]:
         """Every node with a mesh: (node name, mesh, world transform in mm)."""
@@ -126,27 +138,151 @@ MATERIALS = {
     "roller": Material("roller steel", (0.30, 0.50, 0.30, 1.0)),
     "nut": Material("nut steel", (0.60, 0.42, 0.20, 1.0)),
     "gear": Material("gear steel", (0.35, 0.35, 0.38, 1.0)),
+    "carrier": Material("carrier steel", (0.55, 0.55, 0.60, 1.0)),
+    "retaining_ring": Material("retaining ring spring steel", (0.08, 0.08, 0.09, 1.0)),
 }
 
 
-def assembly_scene(asm: Any, title: str = "") -> Scene:
-    """The scene of a placed assembly: one mesh per distinct part mesh, one node per placed
-    part (``asm.placed`` order), materials by part family."""
+#: The animation shows one screw revolution in this time (s), with a key every
+#: :data:`ANIMATION_STEP_DEG` of screw angle (every node then turns less than 180 deg
+#: between keys, so the spherical interpolation takes the intended way round).
+ANIMATION_PERIOD_S = 4.0
+ANIMATION_STEP_DEG = 5.0
+
+
+def quaternions(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit quaternions (x, y, z, w) of rotation matrices ``R`` (..., 3, 3).
+
+    Shepperd's method: the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 (from the diagonal) is taken
+    by its square root and the other three from sums and differences of the off-diagonal
+    terms, so no component comes from the square root of a difference that rounding left
+    near zero (that would give 1e-8 where the exact value is 0)."""
+    R = np.asarray(R, dtype=np.float64)
+    d0, d1, d2 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
+    cand = np.stack([1.0 + d0 - d1 - d2, 1.0 - d0 + d1 - d2, 1.0 - d0 - d1 + d2, 1.0 + d0 + d1 + d2], -1)
+    pick = np.argmax(cand, axis=-1)
+    big = 0.5 * np.sqrt(np.take_along_axis(cand, pick[..., None], -1)[..., 0])
+    f = 0.25 / big
+    s21, s02, s10 = R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]
+    a01, a02, a12 = R[..., 0, 1] + R[..., 1, 0], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1]
+    q = np.select([pick[..., None] == 0, pick[..., None] == 1, pick[..., None] == 2],
+                  [np.stack([big, f * a01, f * a02, f * s21], -1),
+                   np.stack([f * a01, big, f * a12, f * s02], -1),
+                   np.stack([f * a02, f * a12, big, f * s10], -1)],
+                  np.stack([f * s21, f * s02, f * s10, big], -1))
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Key quaternions (K, 4) with signs chosen so that consecutive keys have a positive dot
+    product (q and -q are the same rotation; interpolation goes the short way between them)."""
+    q = q.copy()
+    for i in range(1, len(q)):        # K ~ 73 keys: a sequential sign walk, not a hot path
+        if np.dot(q[i], q[i - 1]) < 0.0:
+            q[i] = -q[i]
+    return q
+
+
+def _family(name: str) -> str:
+    return ("gear" if "gear" in name else "retaining_ring" if name.startswith("retaining_ring")
+            else name.split("_")[0])
+
+
+def _scene_meshes(asm: Any) -> tuple[dict[str, SceneMesh], dict[int, str]]:
+    """One SceneMesh per distinct mesh of the assembly, named after its first placement
+    without the roller index; and the name of each mesh by id."""
     meshes: dict[str, SceneMesh] = {}
     by_id: dict[int, str] = {}
-    nodes = []
     for name, (mesh, T, kind) in asm.placed.items():
-        family = "gear" if "gear" in name else name.split("_")[0]
         if id(mesh) not in by_id:
-            # a mesh is named after its first placement without the roller index
             base = name if not name.startswith("roller_") else "roller" + name[len("roller_") + 1:].lstrip("0123456789")
             key = base if base not in meshes else f"{base}_{len(meshes)}"
             by_id[id(mesh)] = key
             meshes[key] = SceneMesh(key, np.asarray(mesh.vertices, dtype=np.float64),
-                                    np.asarray(mesh.faces, dtype=np.int64), family)
-        nodes.append(SceneNode(name, by_id[id(mesh)], np.asarray(T, dtype=np.float64)))
+                                    np.asarray(mesh.faces, dtype=np.int64), _family(name))
+    return meshes, by_id
+
+
+def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
+    """The scene of a placed assembly: one mesh per distinct part mesh, one node per placed
+    part, materials by part family.
+
+    Without ``animate`` the nodes are flat, in ``asm.placed`` order. With it (a design the
+    kinematics accepts, :func:`prs_geom.analysis.kinematics.check_kinematic_sizing`) the
+    nodes follow the running mechanism, and the scene carries the animation
+    ``screw revolution`` (:func:`mechanism_animation`):
+
+    * ``screw``: turns about the axis;
+    * ``nut_assembly`` (no mesh): travels along the axis; children: the nut, its ring gears
+      and ends, the retaining rings;
+    * ``carrier`` (no mesh): travels with the nut and turns at the carrier speed; children:
+      the carriers and the rollers ``roller_<k>``, each spinning about its own axis, with
+      its gears and journals as children.
+
+    Every node's rest transform places its part exactly where the flat scene does.
+    """
+    meshes, by_id = _scene_meshes(asm)
     used = {m.material for m in meshes.values()}
-    return Scene(meshes, {k: v for k, v in MATERIALS.items() if k in used}, tuple(nodes), title)
+    mats = {k: v for k, v in MATERIALS.items() if k in used}
+    if animate:
+        from prs_geom.analysis.kinematics import check_kinematic_sizing
+
+        try:
+            check_kinematic_sizing(asm.design)
+        except ValueError:
+            animate = False
+    if not animate:
+        nodes = [SceneNode(name, by_id[id(mesh)], np.asarray(T, dtype=np.float64))
+                 for name, (mesh, T, kind) in asm.placed.items()]
+        return Scene(meshes, mats, tuple(nodes), title)
+    I = np.eye(4)
+    groups: dict[str, list[str]] = {}
+    for name in asm.placed:
+        groups.setdefault(asm.rigid_body(name), []).append(name)
+
+    def leaf(name: str, parent_T: NDArray[np.float64]) -> SceneNode:
+        mesh, T, _ = asm.placed[name]
+        return SceneNode(name, by_id[id(mesh)], np.linalg.solve(parent_T, np.asarray(T, dtype=np.float64)))
+
+    nut_children, carrier_children, top = [], [], []
+    for body, names in groups.items():
+        if body == "screw":
+            top.extend(leaf(n, I) for n in names)
+        elif body == "nut" or body.startswith("retaining_ring"):
+            nut_children.extend(leaf(n, I) for n in names)
+        elif body.startswith("carrier"):
+            carrier_children.extend(leaf(n, I) for n in names)
+        else:   # a roller: its thread node carries the body's other parts as children
+            mesh, T, _ = asm.placed[body]
+            T = np.asarray(T, dtype=np.float64)
+            carrier_children.append(SceneNode(body, by_id[id(mesh)], T,
+                                              tuple(leaf(n, T) for n in names if n != body)))
+    nodes = (*top, SceneNode("nut_assembly", None, I, tuple(nut_children)),
+             SceneNode("carrier", None, I, tuple(carrier_children)))
+    return Scene(meshes, mats, nodes, title, (mechanism_animation(asm.design),))
+
+
+def mechanism_animation(design: Any, period_s: float = ANIMATION_PERIOD_S,
+                        step_deg: float = ANIMATION_STEP_DEG) -> SceneAnimation:
+    """One screw revolution of the running mechanism as node keyframes, from the poses of
+    :func:`prs_geom.analysis.kinematics.poses` (screw rotation, nut and carrier travel,
+    carrier rotation, each roller's pose in the carrier); node names as in
+    :func:`assembly_scene`."""
+    from prs_geom.analysis.kinematics import poses
+
+    n = int(round(360.0 / step_deg))
+    angles = 2.0 * math.pi * np.arange(n + 1) / n
+    P = poses(design, angles)
+    ch: dict[str, dict[str, NDArray[np.float64]]] = {
+        "screw": {"rotation": _continuous(quaternions(P.screw[:, :3, :3]))},
+        "nut_assembly": {"translation": np.array(P.nut[:, :3, 3])},
+        "carrier": {"rotation": _continuous(quaternions(P.carrier[:, :3, :3])),
+                    "translation": np.array(P.carrier[:, :3, 3])},
+    }
+    for k in range(design.roller.count):
+        T = P.roller_in_carrier[k]
+        ch[f"roller_{k}"] = {"rotation": _continuous(quaternions(T[:, :3, :3])), "translation": np.array(T[:, :3, 3])}
+    return SceneAnimation("screw revolution", period_s * angles / (2.0 * math.pi), ch)
 
 
 # --------------------------------------------------------------------------- normals
@@ -275,10 +411,38 @@ def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
         return i
 
     gl_nodes[0]["children"] = [add_node(n) for n in scene.nodes]
+    node_index = {n["name"]: i for i, n in enumerate(gl_nodes)}
+    gl_animations = []
+    for anim in scene.animations:
+        # keyframe data are not vertex data: buffer views without a target
+        def add_keys(values: NDArray[np.float64], kind: str, bounds: bool = False) -> int:
+            data = np.ascontiguousarray(values, dtype=np.float32)
+            while len(blob) % 4:
+                blob.append(0)
+            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes})
+            blob.extend(data.tobytes())
+            acc: dict[str, Any] = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data),
+                                   "type": kind}
+            if bounds:
+                acc.update(min=[float(data.min())], max=[float(data.max())])
+            accessors.append(acc)
+            return len(accessors) - 1
+
+        times = add_keys(anim.times_s, "SCALAR", bounds=True)
+        samplers, channels = [], []
+        for node, paths in anim.channels.items():
+            for path, values in paths.items():
+                out = add_keys(values * scale if path == "translation" else values,
+                               "VEC3" if path == "translation" else "VEC4")
+                samplers.append({"input": times, "output": out, "interpolation": "LINEAR"})
+                channels.append({"sampler": len(samplers) - 1, "target": {"node": node_index[node], "path": path}})
+        gl_animations.append({"name": anim.name, "samplers": samplers, "channels": channels})
     doc = {"asset": {"version": "2.0", "generator": f"prs_geom {__version__}"},
            "scene": 0, "scenes": [{"name": scene.title or "prs_geom assembly", "nodes": [0]}],
            "nodes": gl_nodes, "meshes": gl_meshes, "materials": gl_materials,
            "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}]}
+    if gl_animations:
+        doc["animations"] = gl_animations
     js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
     js += b" " * (-len(js) % 4)
     blob.extend(b"\0" * (-len(blob) % 4))

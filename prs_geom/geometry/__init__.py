@@ -4,5 +4,7 @@ Owns the part frames and roller phasing (:mod:`~prs_geom.geometry.frames`), the 
 shapes (:mod:`~prs_geom.geometry.flanks`: straight and arc flanks as objects), the thread
 profiles of screw, roller and nut (:mod:`~prs_geom.geometry.profiles`), the graded-pitch
 warp of the helical surfaces (:mod:`~prs_geom.geometry.helix`) and exact axial and normal
-sections as lines and arcs (:mod:`~prs_geom.geometry.sections`). No I/O, no mesh library.
+sections as lines and arcs (:mod:`~prs_geom.geometry.sections`), and the sizes, layout,
+fits and stack-up of the carriers, journals, retaining rings and nut ends
+(:mod:`~prs_geom.geometry.mechanism`). No I/O, no mesh library.
 """

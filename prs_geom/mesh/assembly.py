@@ -182,14 +182,18 @@ class Assembly:
 
     @staticmethod
     def rigid_body(name: str) -> str:
-        """The rigid body a scene part belongs to (gear cylinders belong to their part)."""
-        return name.split("_gear")[0].replace("nut_ring", "nut")
+        """The rigid body a scene part belongs to: gears and journals belong to their roller,
+        ring gears and nut ends to the nut; each carrier and retaining ring is its own."""
+        body = name.split("_gear")[0].split("_journal")[0]
+        return "nut" if body.startswith("nut_") else body
 
 
 def build_assembly(design: PRSDesign, tol: float | None = None, progress: ProgressFn = silent,
                    screw_profile: ThreadProfile | None = None, gears: bool = True,
-                   reuse: Assembly | None = None) -> Assembly:
+                   reuse: Assembly | None = None, mechanism: bool = True) -> Assembly:
     """All part meshes and their placement. Rollers share one mesh (placed z times).
+    ``gears``/``mechanism``: include the end gears / the mechanism parts (carriers,
+    journals, retaining rings, nut ends) when the design has them.
 
     ``reuse``: an assembly of the same design and tolerance whose roller, nut and gear
     meshes are taken as they are (only the screw is meshed again), e.g. to check the same
@@ -212,34 +216,53 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
         parts[name] = build_part(design, name, tol, prof, screw_profile)
         progress("meshes", i + 1, 3)
     asm = Assembly(design, parts, tolerance=tol)
-    _place(asm, end_gears(design, tol, prof) if gears else None, progress)
+    _place(asm, end_gears(design, tol, prof) if gears else None, progress,
+           mech_parts=mechanism_parts(design, tol) if mechanism else None)
     return asm
 
 
-def scene_names(design: PRSDesign, gears: bool) -> list[str]:
+def scene_names(design: PRSDesign, gears: bool, mechanism: bool = False) -> list[str]:
     """Scene part names in the order :func:`build_assembly` places them: screw, nut, the
-    ring gears (low, high), then each roller followed by its low and high gear."""
+    ring gears (low, high), the nut ends, then each roller followed by its low and high
+    gear and journal, then the carriers and the retaining rings."""
     names = ["screw", "nut"] + (["nut_ring_gear_lo", "nut_ring_gear_hi"] if gears else [])
+    names += ["nut_end_lo", "nut_end_hi"] if mechanism else []
     for k in range(design.roller.count):
         names += [f"roller_{k}"] + ([f"roller_{k}_gear_lo", f"roller_{k}_gear_hi"] if gears else [])
+        names += [f"roller_{k}_journal_lo", f"roller_{k}_journal_hi"] if mechanism else []
+    names += ["carrier_lo", "carrier_hi", "retaining_ring_lo", "retaining_ring_hi"] if mechanism else []
     return names
 
 
+def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh] | None:
+    """Meshes of the carriers, journals, retaining rings and nut ends
+    (:func:`prs_geom.mesh.mechanism.mechanism_meshes`), None when the design has none."""
+    from prs_geom.geometry.mechanism import layout
+
+    lay = layout(design)
+    if lay is None:
+        return None
+    from prs_geom.mesh.mechanism import mechanism_meshes
+
+    return mechanism_meshes(design, lay, tol)
+
+
 def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progress: ProgressFn = silent,
-           gear_window: tuple[float, float] | None = None) -> None:
-    """Place ``asm.parts`` and the gears (all, or those whose z range, the same in the part
-    frames and the screw frame, meets ``gear_window``) in ``asm.placed``: screw, nut, ring
-    gears, then each roller with its gears."""
+           gear_window: tuple[float, float] | None = None,
+           mech_parts: dict[str, trimesh.Trimesh] | None = None) -> None:
+    """Place ``asm.parts``, the gears and the mechanism parts (all, or those whose z range,
+    the same in the part frames and the screw frame, meets ``gear_window``) in
+    ``asm.placed``, in the order of :func:`scene_names`."""
     design = asm.design
     parts = asm.parts
     I = np.eye(4)
 
-    def wanted(key: str) -> bool:
-        if gear_parts is None or key not in gear_parts:
+    def wanted(table: dict[str, trimesh.Trimesh] | None, key: str) -> bool:
+        if table is None or key not in table:
             return False
         if gear_window is None:
             return True
-        z = np.asarray(gear_parts[key].vertices)[:, 2]
+        z = np.asarray(table[key].vertices)[:, 2]
         return bool(z.max() > gear_window[0] and z.min() < gear_window[1])
 
     if "screw" in parts:
@@ -247,8 +270,11 @@ def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progres
     if "nut" in parts:
         asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
     for side in ("lo", "hi"):
-        if wanted(f"ring_{side}"):
+        if wanted(gear_parts, f"ring_{side}"):
             asm.placed[f"nut_ring_gear_{side}"] = (gear_parts[f"ring_{side}"], I, "gear")
+    for side in ("lo", "hi"):
+        if wanted(mech_parts, f"nut_end_{side}"):
+            asm.placed[f"nut_end_{side}"] = (mech_parts[f"nut_end_{side}"], I, "mechanism")
     roller_tm = parts["roller"].to_trimesh() if "roller" in parts else None
     z = design.roller.count
     for k in range(z):
@@ -256,15 +282,22 @@ def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progres
         if roller_tm is not None:
             asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
         for side in ("lo", "hi"):
-            if wanted(f"roller_{side}"):
+            if wanted(gear_parts, f"roller_{side}"):
                 asm.placed[f"roller_{k}_gear_{side}"] = (gear_parts[f"roller_{side}"], T, "gear")
+        for side in ("lo", "hi"):
+            if wanted(mech_parts, f"journal_{side}"):
+                asm.placed[f"roller_{k}_journal_{side}"] = (mech_parts[f"journal_{side}"], T, "mechanism")
         progress("placing rollers", k + 1, z)
+    for name in ("carrier_lo", "carrier_hi", "retaining_ring_lo", "retaining_ring_hi"):
+        if wanted(mech_parts, name):
+            asm.placed[name] = (mech_parts[name], I, "mechanism")
 
 
 def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float],
                     screw_profile: ThreadProfile | None = None,
                     gear_parts: dict[str, trimesh.Trimesh] | None = None,
-                    reuse: Assembly | None = None) -> Assembly:
+                    reuse: Assembly | None = None,
+                    mech_parts: dict[str, trimesh.Trimesh] | None = None) -> Assembly:
     """The assembly's piece between the planes z = ``z_window`` (screw frame, mm): every
     thread part meshed over that window only (:func:`build_part`), and the gears of
     ``gear_parts`` (:func:`end_gears`, meshed once for all windows) that reach into it.
@@ -296,5 +329,5 @@ def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float]
         if tm is not None:
             parts[name] = tm
     asm = Assembly(design, parts, tolerance=tol)
-    _place(asm, gear_parts, gear_window=z_window)
+    _place(asm, gear_parts, gear_window=z_window, mech_parts=mech_parts)
     return asm

@@ -173,13 +173,21 @@ class Nut:
 @dataclass(frozen=True)
 class Material:
     """Linear elastic material: Young's modulus E (MPa), Poisson's ratio nu and the linear
-    thermal expansion coefficient alpha (1/K; measurements refer to 20 degC, ISO 1)."""
+    thermal expansion coefficient alpha (1/K; measurements refer to 20 degC, ISO 1); its
+    density (kg/m^3) and the name the parts list prints."""
 
     youngs_modulus_mpa: float = 212_000.0
     poisson_ratio: float = 0.3
     thermal_expansion_per_k: float = 11.5e-6
+    density_kg_m3: float = 7850.0
+    name: str = "steel"
 
     def __post_init__(self) -> None:
+        # from magnesium alloys (1740) to tungsten carbide (15600) with margin
+        _set(self, "density_kg_m3", bounded("density_kg_m3", self.density_kg_m3, 500.0, 25000.0,
+                                            "must be from 500 to 25000 kg/m^3 (steel: 7850)", positive))
+        if not isinstance(self.name, str) or not 0 < len(self.name.strip()) <= 60:
+            raise DesignError("name", self.name, "must be a material name of 1 to 60 characters")
         # engineering solids span about 1 GPa (polymers) to 1.2 TPa (diamond); far outside,
         # the tooth compliances vanish or explode and the load system loses its conditioning
         _set(self, "youngs_modulus_mpa", bounded("youngs_modulus_mpa", self.youngs_modulus_mpa, 1e3, 1e7,
@@ -200,6 +208,8 @@ class Materials:
     screw: Material = field(default_factory=Material)
     roller: Material = field(default_factory=Material)
     nut: Material = field(default_factory=Material)
+    carrier: Material = field(default_factory=Material)
+    retaining_ring: Material = field(default_factory=Material)
 
 
 @dataclass(frozen=True)
@@ -418,6 +428,61 @@ class GearSettings:
         _set(self, "face_width_mm", optional_size("face_width_mm", self.face_width_mm))
 
 
+#: How the carriers are held radially (docs/theory/mechanism.md): running clear of the screw
+#: and of the nut bore, or guided in the nut bore with ``mechanism.carrier_fit``.
+CARRIER_GUIDANCE = ("clear", "nut")
+
+
+@dataclass(frozen=True)
+class MechanismSettings:
+    """The parts that make the three threads a mechanism (docs/theory/mechanism.md): two
+    carriers with z journal bores, a journal at each roller end beyond its gear, a DIN 472
+    internal retaining ring in a groove at each nut end, and the nut ends that carry the
+    ring gears and the grooves.
+
+    Every size left out follows the rule of :func:`prs_geom.geometry.mechanism.layout`:
+    journal diameter 0.6 x the roller root diameter rounded down to 0.5 mm, carrier
+    thickness 1.5 x the journal diameter rounded up to 0.5 mm, retaining ring the smallest
+    DIN 472 bore that takes the carrier with its radial clearance. Fits are ISO 286 symbols
+    (hole/shaft, e.g. "H7/g6"); ``length_tolerance`` is the ISO 286 zone of every axial
+    length of the stack-up. ``enabled = false`` leaves them out (three threads and gears).
+    """
+
+    enabled: bool = True
+    journal_diameter_mm: float | None = None
+    journal_fit: str = "H7/g6"
+    carrier_thickness_mm: float | None = None
+    carrier_guidance: str = "clear"
+    carrier_fit: str = "H8/f7"
+    carrier_radial_clearance_mm: float = 0.25
+    roller_end_play_mm: float = 0.1
+    ring_play_mm: float = 0.1
+    ring_bore_mm: float | None = None
+    length_tolerance: str = "js11"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.enabled, bool):
+            raise DesignError("enabled", self.enabled, "must be true or false")
+        _set(self, "journal_diameter_mm", optional_size("journal_diameter_mm", self.journal_diameter_mm))
+        _set(self, "carrier_thickness_mm", optional_size("carrier_thickness_mm", self.carrier_thickness_mm))
+        _set(self, "ring_bore_mm", optional_size("ring_bore_mm", self.ring_bore_mm))
+        choice("carrier_guidance", self.carrier_guidance, CARRIER_GUIDANCE)
+        for name in ("carrier_radial_clearance_mm", "roller_end_play_mm", "ring_play_mm"):
+            _set(self, name, bounded(name, getattr(self, name), 0.0, 5.0, "must be from 0 to 5 mm"))
+        from prs_geom.model.standards import Fit, tolerance_zone
+
+        for name in ("journal_fit", "carrier_fit"):
+            try:
+                Fit.parse(getattr(self, name))
+            except (ValueError, TypeError) as exc:
+                raise DesignError(name, getattr(self, name), f"must be an ISO 286 fit such as \"H7/g6\": {exc}")
+        try:
+            tolerance_zone(10.0, self.length_tolerance)
+        except (ValueError, TypeError) as exc:
+            raise DesignError("length_tolerance", self.length_tolerance,
+                              f"must be an ISO 286 tolerance zone such as \"js11\": {exc}")
+
+
 #: End-support cases of the screw for critical speed and buckling (docs/theory/ratings.md):
 #: the end nearer the nut first, "supported" = a radial bearing that lets the end tilt.
 END_SUPPORTS = ("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")
@@ -524,6 +589,7 @@ class PRSDesign:
     contact: ContactSettings = field(default_factory=ContactSettings)
     mesh: MeshSettings = field(default_factory=MeshSettings)
     gears: GearSettings = field(default_factory=GearSettings)
+    mechanism: MechanismSettings = field(default_factory=MechanismSettings)
     #: optional: present only when the designer states tolerances (io reads it as a table)
     tolerances: Tolerances | None = field(default=None, metadata={"section": Tolerances})
     #: optional: screw supports for critical speed and buckling (absent: the defaults of

@@ -53,6 +53,7 @@ function material(colour, cut) {
 }
 let nTri = 0;
 const box = new THREE.Box3();
+const placed = [];                            // [mesh, rest matrix, moving body] per part
 for (const inst of data.instances) {
   const g = geometries[inst.mesh];
   const mesh = new THREE.Mesh(g, material(inst.colour, inst.cut));
@@ -61,8 +62,32 @@ for (const inst of data.instances) {
   const T = inst.T;
   mesh.matrix.set(T[0], T[1], T[2], T[3], T[4], T[5], T[6], T[7], T[8], T[9], T[10], T[11],
                   T[12], T[13], T[14], T[15]);
+  placed.push([mesh, mesh.matrix.clone(), inst.motion]);
   root.add(mesh);
   nTri += g.index.count / 3;
+}
+// the running mechanism: per moving body its motion M(t) at keys over one screw revolution
+// (row-major 4x4, world = M(t) rest); drawn at the nearest key, as the keys are 5 deg apart
+const playBox = document.getElementById('play');   // absent on pages without the control
+const anim = data.animation && playBox ? data.animation : null;
+const motions = {};
+if (anim) {
+  for (const [body, b64] of Object.entries(anim.motions)) motions[body] = decode(b64, Float32Array);
+  document.getElementById('play-label').hidden = false;
+}
+function pose(t) {
+  const key = Math.round(((t / anim.period_s) % 1) * (anim.keys - 1));
+  const M = new THREE.Matrix4();
+  for (const [mesh, rest, body] of placed) {
+    const m = motions[body];
+    if (!m) continue;
+    const o = 16 * key;
+    M.set(m[o], m[o + 1], m[o + 2], m[o + 3], m[o + 4], m[o + 5], m[o + 6], m[o + 7],
+          m[o + 8], m[o + 9], m[o + 10], m[o + 11], m[o + 12], m[o + 13], m[o + 14], m[o + 15]);
+    mesh.matrix.multiplyMatrices(M, rest);
+  }
+  root.updateMatrixWorld(true);
+  document.body.dataset.animationKey = String(key);
 }
 root.updateMatrixWorld(true);
 box.setFromObject(root);
@@ -138,6 +163,19 @@ let pending = false;
 function later() { if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; draw(); }); } }
 controls.addEventListener('change', later);
 document.getElementById('cutaway').addEventListener('change', later);
+let t0 = null;
+function run(now) {
+  if (!playBox.checked) { t0 = null; return; }
+  if (t0 === null) t0 = now;
+  pose((now - t0) / 1000);
+  draw();
+  requestAnimationFrame(run);
+}
+if (anim) {
+  playBox.addEventListener('change', () => requestAnimationFrame(run));
+  // report.html#play starts it running (a link to the running mechanism; the browser tests)
+  if (location.hash === '#play') { playBox.checked = true; requestAnimationFrame(run); }
+}
 
 // the canvas follows the page width (at most its 900 px design width), keeping its aspect
 function resize() {

@@ -1,0 +1,185 @@
+"""The parts list (bill of materials): ``parts_list.csv``, ``parts_list.xlsx`` and the table
+of report.html.
+
+One row per distinct part: item number (the balloon number of the assembly drawing), part,
+quantity, material and density (``materials.*`` of the design), the volume of one piece
+from its mesh (the rigid body's parts united with manifold3d: a roller with its gears and
+journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
+and the standard designation where there is one (the DIN 472 retaining ring). Masses are
+in kg, volumes in mm^3; the CSV keeps full float64 precision.
+"""
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Columns: key, title, unit.
+COLUMNS = (("item", "item", ""), ("part", "part", ""), ("quantity", "quantity", ""),
+           ("material", "material", ""), ("density_kg_m3", "density", "kg/m^3"),
+           ("volume_mm3", "volume of one", "mm^3"), ("mass_kg", "mass of one", "kg"),
+           ("total_mass_kg", "mass of all", "kg"), ("designation", "standard designation", ""),
+           ("description", "description", ""))
+
+
+@dataclass(frozen=True)
+class PartsListRow:
+    """One line of the parts list (see the module docstring for units)."""
+
+    item: int
+    part: str
+    quantity: int
+    material: str
+    density_kg_m3: float
+    volume_mm3: float
+    designation: str
+    description: str
+
+    @property
+    def mass_kg(self) -> float:
+        return self.density_kg_m3 * self.volume_mm3 * 1e-9
+
+    @property
+    def total_mass_kg(self) -> float:
+        return self.quantity * self.mass_kg
+
+    def as_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "mass_kg": self.mass_kg, "total_mass_kg": self.total_mass_kg}
+
+
+def body_volumes(asm: Any) -> dict[str, float]:
+    """Volume (mm^3) of each rigid body of the assembly: the sum of its parts' mesh volumes
+    less the volume of every overlap of two of its parts (manifold3d), so that a part
+    overlapping another of its body (the nut end around the ring gear) counts once.
+
+    Only pairs whose bounding boxes overlap with positive thickness on every axis are
+    intersected (parts that meet in an end face, like the threads and the gears, do not
+    overlap); the result is exact while no three parts share a region, which the layout
+    of docs/theory/mechanism.md guarantees. Bodies made of the same meshes (the rollers)
+    are computed once."""
+    import manifold3d
+
+    def solid(m: Any) -> Any:
+        return manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(m.vertices, dtype=np.float64),
+                                                     np.ascontiguousarray(m.faces, dtype=np.uint64)))
+
+    bodies: dict[str, list[Any]] = {}
+    for name, (mesh, T, _) in asm.placed.items():
+        bodies.setdefault(asm.rigid_body(name), []).append(mesh)
+    done: dict[tuple[int, ...], float] = {}
+    out = {}
+    for body, meshes in bodies.items():
+        key = tuple(id(m) for m in meshes)
+        if key not in done:
+            total = sum(float(m.volume) for m in meshes)
+            boxes = [np.asarray(m.bounds) for m in meshes]
+            for i in range(len(meshes)):
+                for j in range(i + 1, len(meshes)):
+                    lo = np.maximum(boxes[i][0], boxes[j][0])
+                    hi = np.minimum(boxes[i][1], boxes[j][1])
+                    if np.all(hi - lo > 1e-9):
+                        total -= float((solid(meshes[i]) ^ solid(meshes[j])).volume())
+            done[key] = total
+        out[body] = done[key]
+    return out
+
+
+def parts_list(design: Any, asm: Any, ring_designation: str | None) -> list[PartsListRow]:
+    """The rows of the parts list of ``design`` from its placed assembly ``asm``."""
+    vol = body_volumes(asm)
+    mats = design.materials
+    d = design
+    hand = d.thread.hand
+    rows = [
+        ("screw", 1, mats.screw, vol["screw"], "",
+         f"screw, {d.screw.starts}-start {hand}-hand thread, pitch {d.thread.pitch_mm:g} mm, "
+         f"pitch diameter {d.screw.pitch_diameter_mm:g} mm, length {d.screw.length_mm:g} mm"),
+        ("roller", d.roller.count, mats.roller, vol["roller_0"], "",
+         f"roller, single-start {hand}-hand thread, pitch diameter {d.roller.pitch_diameter_mm:g} mm, "
+         f"end gears and journals"),
+        ("nut", 1, mats.nut, vol["nut"], "",
+         f"nut, {d.nut.starts}-start {hand}-hand internal thread, outside diameter {d.nut.outer_diameter_mm:g} mm, "
+         f"ring gears and retaining-ring grooves at both ends"),
+    ]
+    if "carrier_lo" in vol:
+        rows.append(("carrier", 2, mats.carrier, vol["carrier_lo"], "",
+                     f"carrier ring with {d.roller.count} journal bores"))
+    if "retaining_ring_lo" in vol:
+        rows.append(("retaining ring", 2, mats.retaining_ring, vol["retaining_ring_lo"], ring_designation or "",
+                     "internal retaining ring for bores"))
+    return [PartsListRow(i, part, qty, m.name, m.density_kg_m3, v, des, text)
+            for i, (part, qty, m, v, des, text) in enumerate(rows, start=1)]
+
+
+def _cell(v: Any) -> str:
+    return repr(v) if isinstance(v, float) else str(v)
+
+
+def parts_list_csv(rows: list[PartsListRow], design_name: str) -> str:
+    """``parts_list.csv``: a ``#`` header line, the column keys, one row per part."""
+    buf = io.StringIO()
+    buf.write(f"# parts list of design '{design_name}'; volume of one piece in mm^3 from its mesh, "
+              f"masses in kg (density x volume)\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([c[0] for c in COLUMNS])
+    for r in rows:
+        row = r.as_dict()
+        w.writerow([_cell(row[c[0]]) for c in COLUMNS])
+    return buf.getvalue()
+
+
+def read_parts_list_csv(text: str) -> list[dict[str, str]]:
+    return list(csv.DictReader(line for line in text.splitlines() if not line.startswith("#")))
+
+
+def write_parts_list_xlsx(rows: list[PartsListRow], path: Path, design_name: str, version: str = "",
+                          date: str = "") -> None:
+    """``parts_list.xlsx``: one sheet, title, column titles with units, the column keys,
+    one row per part and a total mass row; A4 landscape, one page wide."""
+    from openpyxl import Workbook
+    from openpyxl.styles import Font, PatternFill
+
+    from prs_geom.exports.sheets import _print_setup
+
+    wb = Workbook()
+    ws = wb.active
+    ws.title = "parts list"
+    ws.append([f"Parts list of design '{design_name}'"])
+    ws["A1"].font = Font(bold=True, size=13)
+    ws.append([f"{t} ({u})" if u else t for _, t, u in COLUMNS])
+    fill = PatternFill("solid", fgColor="DDE6F0")
+    for c in range(1, len(COLUMNS) + 1):
+        ws.cell(row=2, column=c).font = Font(bold=True)
+        ws.cell(row=2, column=c).fill = fill
+    ws.append([k for k, _, _ in COLUMNS])
+    for c in range(1, len(COLUMNS) + 1):
+        ws.cell(row=3, column=c).font = Font(italic=True, color="777777", size=8)
+    for r in rows:
+        row = r.as_dict()
+        ws.append([row[k] for k, _, _ in COLUMNS])
+        for c, (k, _, _) in enumerate(COLUMNS, start=1):
+            if k.endswith("_kg"):
+                ws.cell(row=ws.max_row, column=c).number_format = "0.0000"
+            elif k == "volume_mm3":
+                ws.cell(row=ws.max_row, column=c).number_format = "0.0"
+    ws.append(["", "total", sum(r.quantity for r in rows), "", "", "", "", sum(r.total_mass_kg for r in rows)])
+    ws.cell(row=ws.max_row, column=8).number_format = "0.0000"
+    for c, w in zip("ABCDEFGHIJ", (6, 16, 9, 18, 10, 14, 12, 12, 22, 70)):
+        ws.column_dimensions[c].width = w
+    _print_setup(ws, design_name, "parts list", version, date)
+    wb.save(path)
+
+
+def read_parts_list_xlsx(path: Path) -> list[dict[str, Any]]:
+    """Rows of the parts list sheet keyed by column key (the total row left out)."""
+    from openpyxl import load_workbook
+
+    ws = load_workbook(path, read_only=True).worksheets[0]
+    rows = list(ws.iter_rows(values_only=True))
+    keys = [c[0] for c in COLUMNS]
+    k = next(i for i, r in enumerate(rows) if r and list(r[:len(keys)]) == keys)
+    return [dict(zip(keys, r)) for r in rows[k + 1:] if r and isinstance(r[0], int)]

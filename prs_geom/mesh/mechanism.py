@@ -1,0 +1,112 @@
+"""Meshes of the mechanism parts of :mod:`prs_geom.geometry.mechanism`: carriers, roller
+journals, retaining rings and nut ends.
+
+Every part is prisms of polygons (manifold3d cross-sections extruded along z), meshed no
+coarser than :data:`MECHANISM_CHORD_MM`, so that its volume is within 0.1 % of the closed
+form. Polygons sit on the safe side of their circles: an outside (shaft, ring, carrier rim)
+has its vertices on the circle, so it lies inside it; a bore has its edges tangent to the
+circle, so it lies outside it. Two parts with a positive clearance by design therefore
+never overlap as meshes, and a measured clearance exceeds the designed one by at most the
+chordal deviation of the shaft.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from prs_geom.geometry.frames import carrier_angles
+from prs_geom.geometry.mechanism import RING_GAP_RAD, MechanismLayout
+from prs_geom.model.design import PRSDesign
+
+#: The mechanism parts are never meshed coarser than this (mm).
+MECHANISM_CHORD_MM = 1e-3
+
+
+def segments(radius: float, tol: float) -> int:
+    """Polygon sides whose sagitta on ``radius`` is at most ``tol`` (a multiple of 4, >= 16)."""
+    half = math.acos(max(-1.0, 1.0 - tol / radius)) if tol < radius else math.pi / 2
+    n = max(16, math.ceil(math.pi / half))
+    return 4 * math.ceil(n / 4)
+
+
+def _circle(radius: float, tol: float, centre: tuple[float, float] = (0.0, 0.0), hole: bool = False,
+            start: float = 0.0, stop: float = 2.0 * math.pi) -> NDArray[np.float64]:
+    """Polygon of a circle (counter-clockwise): vertices on it, or for a ``hole`` edges
+    tangent to it (vertices at radius / cos(pi / n))."""
+    n = segments(radius, tol)
+    r = radius / math.cos(math.pi / n) if hole else radius
+    t = start + (stop - start) * np.arange(n) / n
+    return np.column_stack([centre[0] + r * np.cos(t), centre[1] + r * np.sin(t)])
+
+
+def _extruded(outer: NDArray, holes: list[NDArray], z0: float, z1: float):
+    """The manifold3d solid of a polygon with holes (counter-clockwise polygons) between
+    the planes z0 < z1."""
+    import manifold3d
+
+    polys = [np.ascontiguousarray(outer)] + [np.ascontiguousarray(h[::-1]) for h in holes]
+    section = manifold3d.CrossSection(polys, manifold3d.FillRule.EvenOdd)
+    return section.extrude(z1 - z0).translate((0.0, 0.0, z0))
+
+
+def _trimesh(solid) -> "trimesh.Trimesh":
+    m = solid.to_mesh64()
+    return trimesh.Trimesh(np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
+                           np.array(m.tri_verts, dtype=np.int64), process=False, validate=False)
+
+
+def _prism(outer: NDArray, holes: list[NDArray], z0: float, z1: float) -> "trimesh.Trimesh":
+    return _trimesh(_extruded(outer, holes, z0, z1))
+
+
+def mechanism_meshes(design: PRSDesign, lay: MechanismLayout, tol: float) -> dict[str, "trimesh.Trimesh"]:
+    """Meshes (mm) keyed ``journal_lo/hi`` (roller frame), ``carrier_lo/hi``,
+    ``retaining_ring_lo/hi`` and ``nut_end_lo/hi`` (screw frame = nut frame at assembly)."""
+    tol = min(tol, MECHANISM_CHORD_MM)
+    out: dict[str, trimesh.Trimesh] = {}
+    r_j = 0.5 * lay.journal_fit.shaft_diameter_mm
+    r_b = 0.5 * lay.journal_fit.hole_diameter_mm
+    a = lay.centre_distance_mm
+    for side, end in zip(("lo", "hi"), lay.ends):
+        out[f"journal_{side}"] = _prism(_circle(r_j, tol), [], *end.journal)
+        bores = [_circle(r_b, tol, (a * math.cos(psi), a * math.sin(psi)), hole=True)
+                 for psi in carrier_angles(design)]
+        out[f"carrier_{side}"] = _prism(_circle(lay.carrier_outer_radius_mm, tol),
+                                        [_circle(lay.carrier_inner_radius_mm, tol, hole=True), *bores], *end.carrier)
+        # the C-shaped ring: its opening centred on +x
+        half = 0.5 * RING_GAP_RAD
+        arc_o = _circle(lay.ring_outer_radius_mm, tol, start=half, stop=2.0 * math.pi - half)
+        arc_i = _circle(lay.ring_inner_radius_mm, tol, start=half, stop=2.0 * math.pi - half)
+        t_end = 2.0 * math.pi - half
+        c_pts = np.vstack([arc_o, [[lay.ring_outer_radius_mm * math.cos(t_end), lay.ring_outer_radius_mm * math.sin(t_end)],
+                                   [lay.ring_inner_radius_mm * math.cos(t_end), lay.ring_inner_radius_mm * math.sin(t_end)]],
+                           arc_i[::-1]])
+        out[f"retaining_ring_{side}"] = _prism(c_pts, [], *end.ring)
+        out[f"nut_end_{side}"] = _nut_end(lay, end, tol)
+    return out
+
+
+def _nut_end(lay: MechanismLayout, end, tol: float) -> "trimesh.Trimesh":
+    """The nut end: one outer cylinder (relieved, :data:`~prs_geom.geometry.mechanism.NUT_END_RELIEF_MM`)
+    with the bores cut out of it: the sleeve's bore around the ring gear (overlapping the
+    gear's body, same rigid body) and the retaining-ring bore with its groove. Cut from one
+    solid rather than united from touching prisms, so it is one closed shell."""
+    R = lay.nut_end_outer_radius_mm
+    z0, z1 = end.nut_end
+    out = end.outward < 0
+    pad = 1.0      # cutters overshoot the open end faces, so no cut face is coplanar with them
+    body = _extruded(_circle(R, tol), [], z0, z1)
+    gear = end.gear_zone if (lay.ring_gear_outer_radius_mm is not None and lay.gear_face_width_mm > 0.0) else None
+    if out:
+        bored = (z0 - pad, gear[0] if gear else z1 + pad)
+    else:
+        bored = (gear[1] if gear else z0 - pad, z1 + pad)
+    cuts = [(lay.nut_bore_radius_mm, bored), (lay.groove_radius_mm, end.groove)]
+    if gear:
+        cuts.append((lay.nut_end_sleeve_inner_radius_mm, (gear[0] - (0.0 if out else pad), gear[1] + (pad if out else 0.0))))
+    for radius, (za, zb) in cuts:
+        body = body - _extruded(_circle(radius, tol, hole=True), [], za, zb)
+    return _trimesh(body)

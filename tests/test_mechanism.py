@@ -1,0 +1,183 @@
+"""The whole mechanism (issue 19): carriers, roller journals, DIN 472 retaining rings and nut
+ends; their fits, clearances, stack-up, interference with every other part, and the parts
+list read back from a build."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from prs_geom.analysis.contact import theoretical_screw
+from prs_geom.checks.interference import check_assembly
+from prs_geom.checks.mechanism import mechanism_section
+from prs_geom.exports.bom import read_parts_list_csv, read_parts_list_xlsx
+from prs_geom.geometry.frames import screw_z_range, thread_length
+from prs_geom.geometry.mechanism import layout
+from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.mesh.assembly import build_assembly
+from prs_geom.mesh.thread import analytic_thread_volume
+from prs_geom.model.design import Nut, PRSDesign, Roller, Screw, default_design
+from prs_geom.model.errors import DesignError
+from prs_geom.model.standards import din472_sizes
+from prs_geom.pipeline import build
+
+#: The issue's two designs: the default (5 starts, 10 rollers) and a 4-start, 7-roller one in
+#: the standard sizing r_s = (n_s - 2) r_r, r_n = n_n r_r.
+DESIGNS = {
+    "default": default_design,
+    "four-start-seven-rollers": lambda: PRSDesign(
+        name="s4z7", screw=Screw(pitch_diameter_mm=16.0, starts=4), roller=Roller(pitch_diameter_mm=8.0, count=7),
+        nut=Nut(pitch_diameter_mm=32.0, starts=4, outer_diameter_mm=46.0)),
+}
+#: Coarse thread meshes keep the interference test quick; the mechanism parts are meshed at
+#: 1 um whatever the tolerance (prs_geom.mesh.mechanism.MECHANISM_CHORD_MM).
+TOL = 0.01
+
+
+@pytest.fixture(scope="module", params=sorted(DESIGNS))
+def placed(request):
+    d = DESIGNS[request.param]()
+    asm = build_assembly(d, tol=TOL, screw_profile=theoretical_screw(d).profile)
+    return d, layout(d), asm
+
+
+def test_default_sizes_follow_the_stated_rules():
+    d = default_design()
+    lay = layout(d)
+    # journal: 0.6 x roller root diameter 7.2 mm = 4.32, down to 0.5 mm
+    assert d.roller.minor_diameter_mm == pytest.approx(7.2)
+    assert lay.journal_diameter_mm == 4.0
+    # carrier: 1.5 x 4 = 6 mm; bore = screw crest radius 12.3 + 0.25 clearance
+    assert lay.carrier_thickness_mm == 6.0
+    assert lay.carrier_inner_radius_mm == pytest.approx(12.55)
+    # ring: the smallest DIN 472 bore >= 2 x (a + bore radius + web + clearance)
+    need = 2.0 * (16.0 + 2.006 + 2.0 + 0.25)
+    sizes = din472_sizes()
+    assert lay.ring.bore_mm == min(s for s in sizes if s >= need)
+    assert max(s for s in sizes if s < need) < need
+    # ISO 286-2: H7 over 3 up to 6 mm is +12/0 um, g6 is -4/-12 um
+    f = lay.journal_fit
+    assert (f.min_clearance_mm, f.max_clearance_mm) == pytest.approx((0.004, 0.024))
+    assert f.modelled_clearance_mm == pytest.approx(0.014)
+
+
+def test_stack_up_worst_case_from_the_iso_286_table():
+    """Nominal play 2 x roller end play + 2 x ring play; the worst case takes off half of
+    IT11 of the nut's groove span (63.9 mm: 190 um), of each carrier (6 mm: 75 um) and of the
+    roller (48 mm: 160 um), ISO 286-1 Table 1; h11 rings only add play when thinner."""
+    st = layout(default_design()).stack
+    assert st.nominal_mm == pytest.approx(0.4, abs=1e-12)
+    assert st.min_mm == pytest.approx(0.4 - 0.095 - 2 * 0.0375 - 0.080, abs=1e-12)
+    assert st.max_mm == pytest.approx(0.4 + 0.095 + 2 * 0.0375 + 0.080 + 2 * 0.060, abs=1e-12)
+    assert st.passed
+
+
+def test_no_pair_of_parts_interferes(placed):
+    d, lay, asm = placed
+    names = set(asm.placed)
+    z = d.roller.count
+    assert {"carrier_lo", "carrier_hi", "retaining_ring_lo", "retaining_ring_hi", "nut_end_lo", "nut_end_hi"} <= names
+    assert sum(n.startswith("roller_") and "_journal_" in n for n in names) == 2 * z
+    rep = check_assembly(asm, TOL)
+    assert rep["found"] is False
+    # the pairs that touch by design overlap by no more than the chordal deviation
+    for row in rep["contact_within_tolerance"]:
+        assert row["mean_thickness_mm"] <= 2 * TOL
+
+
+def test_journal_clearances_lie_in_the_fit_range(placed):
+    d, lay, asm = placed
+    sec = mechanism_section(asm, lay, lay.ring.designation)
+    rows = sec["journal_clearances"]
+    assert len(rows) == 2 * d.roller.count
+    lo, hi = 0.5 * lay.journal_fit.min_clearance_mm, 0.5 * lay.journal_fit.max_clearance_mm
+    c = 0.5 * lay.journal_fit.modelled_clearance_mm
+    # journal polygon: vertices on the circle, at most 1 um inside it; bore polygon outside
+    for r in rows:
+        assert lo <= r["fcl_clearance_mm"] <= hi
+        assert c - 1e-9 <= r["fcl_clearance_mm"] <= c + 1e-3 + 1e-9
+    assert sec["stack_up"]["min_play_mm"] > 0
+    assert sec["passed"]
+
+
+def test_mesh_volumes_agree_with_closed_forms(placed):
+    d, lay, asm = placed
+    for name, exact in (("carrier_lo", lay.carrier_volume_mm3), ("carrier_hi", lay.carrier_volume_mm3),
+                        ("retaining_ring_lo", lay.ring_volume_mm3), ("nut_end_hi", lay.nut_end_volume_mm3),
+                        ("roller_0_journal_lo", lay.journal_volume_mm3)):
+        mesh = asm.placed[name][0]
+        assert mesh.is_watertight
+        assert mesh.volume == pytest.approx(exact, rel=1e-3), name
+
+
+def test_layout_errors_name_the_field():
+    with pytest.raises(DesignError, match="mechanism.journal_diameter_mm"):
+        layout(PRSDesign(mechanism=default_design().mechanism.__class__(journal_diameter_mm=7.5)))
+    with pytest.raises(DesignError, match="mechanism.ring_bore_mm"):
+        layout(PRSDesign(mechanism=default_design().mechanism.__class__(ring_bore_mm=59.0)))
+    with pytest.raises(DesignError, match="journal_fit"):
+        default_design().mechanism.__class__(journal_fit="H7/x6")
+
+
+@pytest.fixture(scope="module")
+def default_build(tmp_path_factory):
+    out = tmp_path_factory.mktemp("mech") / "out"
+    rep = build(default_design(), out, memory_budget=2 ** 34)
+    return rep, out
+
+
+def test_parts_list_read_back(default_build):
+    """CSV and XLSX read back: 1 screw, z rollers, 1 nut, 2 carriers, 2 retaining rings;
+    each mass is density x volume, and the volumes agree with closed forms within 0.1 %
+    (thread volumes: the exact constant-pitch formula; gears: their meshes)."""
+    rep, out = default_build
+    d = default_design()
+    lay = layout(d)
+    csv_rows = read_parts_list_csv((out / "parts_list.csv").read_text(encoding="utf-8"))
+    xlsx_rows = read_parts_list_xlsx(out / "parts_list.xlsx")
+    assert [(r["part"], int(r["quantity"])) for r in csv_rows] == [
+        ("screw", 1), ("roller", d.roller.count), ("nut", 1), ("carrier", 2), ("retaining ring", 2)]
+    assert [(r["part"], r["quantity"]) for r in xlsx_rows] == [(r["part"], int(r["quantity"])) for r in csv_rows]
+    by_part = {r["part"]: r for r in csv_rows}
+    for r, x in zip(csv_rows, xlsx_rows):
+        rho, vol, mass = float(r["density_kg_m3"]), float(r["volume_mm3"]), float(r["mass_kg"])
+        assert mass == pytest.approx(rho * vol * 1e-9, rel=1e-12)
+        assert x["mass_kg"] == pytest.approx(mass, rel=1e-12)
+    assert by_part["retaining ring"]["designation"] == f"DIN 472 - {lay.ring.bore_mm:g} x {lay.ring.thickness_mm:g}"
+
+    prof = ThreadProfiles.from_design(d)
+    from prs_geom.geometry.datum import datum_mark
+    from prs_geom.mesh.assembly import end_gears
+
+    def datum(profile, z_lo, body=None):
+        return datum_mark(profile, z_lo, body).volume
+
+    lo, hi = screw_z_range(d)
+    screw_prof = theoretical_screw(d).profile
+    screw = analytic_thread_volume(screw_prof, hi - lo) - datum(screw_prof, lo)
+    L = thread_length(d)
+    R = 0.5 * d.nut.outer_diameter_mm
+    gears = end_gears(d, d.mesh.chord_tolerance_mm)
+    roller = (analytic_thread_volume(prof.roller, L) - datum(prof.roller, 0.0) + 2 * lay.journal_volume_mm3
+              + gears["roller_lo"].volume + gears["roller_hi"].volume)
+    # the nut end overlaps the ring gear's body (an annulus) around the gear: counted once
+    overlap = math.pi * (lay.ring_gear_outer_radius_mm ** 2 - lay.nut_end_sleeve_inner_radius_mm ** 2) \
+        * lay.gear_face_width_mm
+    nut = (analytic_thread_volume(prof.nut, L, R) - datum(prof.nut, 0.0, R) + 2 * lay.nut_end_volume_mm3
+           + gears["ring_lo"].volume + gears["ring_hi"].volume - 2 * overlap)
+    for part, exact in (("screw", screw), ("roller", roller), ("nut", nut), ("carrier", lay.carrier_volume_mm3),
+                        ("retaining ring", lay.ring_volume_mm3)):
+        rho = float(by_part[part]["density_kg_m3"])
+        assert float(by_part[part]["mass_kg"]) == pytest.approx(rho * exact * 1e-9, rel=1e-3), part
+
+
+def test_build_reports_the_mechanism(default_build):
+    rep, out = default_build
+    sec = rep["mechanism"]
+    assert sec["passed"] and all(c["passed"] for c in sec["checks"])
+    assert rep["checks"]["interference"]["found"] is False
+    assert rep["checks"]["interference"]["nominal_screw"]["found"] is True
+    assert "parts_list.csv" in rep["files"] and "parts_list.xlsx" in rep["files"]
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert "id='parts-list'" in html and "id='mechanism'" in html
+    assert rep["parts_list"][4]["designation"] in html
