@@ -88,6 +88,8 @@ EXPORTERS = [("prs_geom.mesh.assembly", "build_assembly", "meshing"),
              ("prs_geom.exports.plots", "plot_loads", "plots"),
              ("prs_geom.exports.plots", "plot_rating", "plots"),
              ("prs_geom.exports.plots", "plot_tolerance", "plots"),
+             ("prs_geom.exports.bom", "parts_list_csv", "sheets and DXF"),
+             ("prs_geom.exports.bom", "write_parts_list_xlsx", "sheets and DXF"),
              ("prs_geom.exports.html", "write_html", "report.html")]
 
 #: A serial build (``PRS_GEOM_WORKERS=0``) of argv with every exporter timed (the outermost

@@ -480,7 +480,7 @@ def stage_mechanism(ctx: BuildContext) -> None:
         pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
     else:
         ctx.report["kinematics"] = kinematics(d, ctx.contact).as_dict()
-    rows = parts_list(d, asm, lay.ring.designation if lay else None)
+    rows = parts_list(d, asm)
     ctx.report["parts_list"] = [r.as_dict() for r in rows]
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())

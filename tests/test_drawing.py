@@ -37,7 +37,8 @@ def _dims(doc):
 
 def test_files_header_layers_and_audit(drawings):
     d, _, out, names, docs = drawings
-    assert names == ["drawing_screw.dxf", "drawing_roller.dxf", "drawing_nut.dxf", "drawings.pdf"]
+    assert names == ["drawing_screw.dxf", "drawing_roller.dxf", "drawing_nut.dxf", "drawing_carrier.dxf",
+                     "drawing_nut_end.dxf", "drawing_assembly.dxf", "drawings.pdf"]
     for part, doc in docs.items():
         assert doc.dxfversion == "AC1024"                     # R2010
         assert doc.header["$INSUNITS"] == 4 and doc.header["$MEASUREMENT"] == 1
@@ -175,17 +176,17 @@ def _pgm_ink(path) -> float:
 
 
 def test_pdf_has_one_non_empty_page_per_part(drawings, tmp_path):
+    """A page per thread part and per mechanism drawing (carrier, nut end, assembly)."""
     _, _, out, _, _ = drawings
     pdf = out / "drawings.pdf"
     raw = pdf.read_bytes()
     assert raw.startswith(b"%PDF") and len(raw) > 50_000
-    assert raw.count(b"/Type /Page\n") + raw.count(b"/Type /Page ") + raw.count(b"/Type /Page>") >= 3 or \
-        raw.count(b"/Type /Page") - raw.count(b"/Type /Pages") == 3
+    assert raw.count(b"/Type /Page") - raw.count(b"/Type /Pages") == 6
     if shutil.which("pdftoppm") is None:
         pytest.skip("pdftoppm not installed: page rendering not checked")
     subprocess.run(["pdftoppm", "-r", "20", "-gray", str(pdf), str(tmp_path / "pg")], check=True)
     pages = sorted(tmp_path.glob("pg-*.pgm"))
-    assert len(pages) == 3
+    assert len(pages) == 6
     for page in pages:
         assert _pgm_ink(page) > 0.005, page
 
@@ -253,3 +254,66 @@ def test_pdf_sheet_axes_give_the_bytes_of_plain_axes(drawings, tmp_path, monkeyp
     monkeypatch.setattr(drawing, "_sheet_axes_class", lambda: Axes)
     render_pdf([build_drawing(d, contact, "roller", DATE, VERSION)], plain)
     assert fast.read_bytes() == plain.read_bytes()
+
+
+# --------------------------------------------------------------------------- mechanism drawings
+def test_mechanism_drawings_dimension_the_layout(drawings):
+    """Carrier and nut end read back with ezdxf: every DIMENSION measures the size the
+    meshes and checks use (prs_geom.geometry.mechanism.layout); files audit clean."""
+    from prs_geom.geometry.mechanism import layout
+
+    d, _, out, _, _ = drawings
+    lay = layout(d)
+    carrier = ezdxf.readfile(out / "drawing_carrier.dxf")
+    nut_end = ezdxf.readfile(out / "drawing_nut_end.dxf")
+    for doc in (carrier, nut_end):
+        auditor = doc.audit()
+        assert not auditor.has_errors, [str(e) for e in auditor.errors]
+        assert doc.header["$INSUNITS"] == 4
+    dims = _dims(carrier)
+    fit = lay.journal_fit
+    assert dims["%%c<> outside"].get_measurement() == pytest.approx(2 * lay.carrier_outer_radius_mm, abs=1e-9)
+    assert dims["%%c<> bore"].get_measurement() == pytest.approx(2 * lay.carrier_inner_radius_mm, abs=1e-9)
+    assert dims["%%c<> journal bores"].get_measurement() == pytest.approx(fit.nominal_diameter_mm, abs=1e-9)
+    assert dims["<> thickness"].get_measurement() == pytest.approx(lay.carrier_thickness_mm, abs=1e-9)
+    assert dims["%%c<> pitch circle"].get_measurement() == pytest.approx(2 * lay.centre_distance_mm, abs=1e-9)
+    # z bores on the centre-distance circle
+    bores = [e for e in carrier.modelspace() if e.dxftype() == "CIRCLE" and e.dxf.layer == "OUTLINE"
+             and abs(e.dxf.radius - 0.5 * fit.nominal_diameter_mm) < 1e-12]
+    assert len(bores) == d.roller.count
+    for b in bores:
+        assert math.hypot(b.dxf.center.x, b.dxf.center.y) == pytest.approx(lay.centre_distance_mm, abs=1e-12)
+    ring, end = lay.ring, lay.ends[0]
+    dims = _dims(nut_end)
+    assert dims["m <>"].get_measurement() == pytest.approx(ring.groove_width_mm, abs=1e-9)
+    assert dims["n <> min"].get_measurement() == pytest.approx(end.groove[0] - end.nut_end[0], abs=1e-9)
+    assert dims["n <> min"].get_measurement() >= ring.edge_distance_mm - 1e-12
+    assert dims["<> to groove (from A)"].get_measurement() == pytest.approx(-end.groove[1], abs=1e-9)
+    assert dims["<> nut end"].get_measurement() == pytest.approx(end.nut_end[1] - end.nut_end[0], abs=1e-9)
+    for label, dia in (("%%c<> groove", ring.groove_diameter_mm), ("%%c<> bore", ring.bore_mm),
+                       ("%%c<> outside", d.nut.outer_diameter_mm)):
+        assert dims[label].get_measurement() == pytest.approx(dia, abs=1e-9)
+    # no digits in a label: the first number a reader finds in a dimension is its value
+    for doc in (carrier, nut_end):
+        for e in doc.modelspace():
+            if e.dxftype() == "DIMENSION":
+                assert not re.search(r"\d", e.dxf.text), e.dxf.text
+
+
+def test_assembly_balloons_match_the_parts_list(drawings):
+    """One balloon per parts-list item, numbered like parts_list.csv, each circle with its
+    number and a leader that ends on its part's outline region."""
+    from prs_geom.exports.bom import part_items
+
+    d, _, out, _, _ = drawings
+    doc = ezdxf.readfile(out / "drawing_assembly.dxf")
+    items = part_items(d)
+    msp = doc.modelspace()
+    texts = sorted(int(e.dxf.text) for e in msp if e.dxftype() == "TEXT" and e.dxf.layer == "BALLOONS")
+    assert texts == [it.item for it in items] == [1, 2, 3, 4, 5]
+    leaders = [e for e in msp if e.dxftype() == "LINE" and e.dxf.layer == "BALLOONS"]
+    assert len(leaders) == len(items)
+    notes = " ".join(e.dxf.text for e in doc.paperspace() if e.dxftype() == "TEXT")
+    for it in items:
+        assert f"{it.item}  {it.part}  x{it.quantity}" in notes
+    assert items[4].designation in notes

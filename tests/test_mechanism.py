@@ -143,6 +143,16 @@ def test_parts_list_read_back(default_build):
         rho, vol, mass = float(r["density_kg_m3"]), float(r["volume_mm3"]), float(r["mass_kg"])
         assert mass == pytest.approx(rho * vol * 1e-9, rel=1e-12)
         assert x["mass_kg"] == pytest.approx(mass, rel=1e-12)
+    from openpyxl import load_workbook
+
+    assert load_workbook(out / "parts_list.xlsx").worksheets[0].freeze_panes == "A4"
+    # one STL per mechanism part, in its own frame, with the closed-form volume
+    import trimesh
+
+    for name, exact in (("carrier", lay.carrier_volume_mm3), ("retaining_ring", lay.ring_volume_mm3)):
+        stl = trimesh.load(out / f"{name}.stl", file_type="stl")
+        assert stl.is_watertight and stl.bounds[0][2] == 0.0
+        assert stl.volume == pytest.approx(exact, rel=1e-3)
     assert by_part["retaining ring"]["designation"] == f"DIN 472 - {lay.ring.bore_mm:g} x {lay.ring.thickness_mm:g}"
 
     prof = ThreadProfiles.from_design(d)

@@ -88,31 +88,52 @@ def body_volumes(asm: Any) -> dict[str, float]:
     return out
 
 
-def parts_list(design: Any, asm: Any, ring_designation: str | None) -> list[PartsListRow]:
-    """The rows of the parts list of ``design`` from its placed assembly ``asm``."""
-    vol = body_volumes(asm)
+@dataclass(frozen=True)
+class PartItem:
+    """A parts-list line without its mass: what a drawing's balloons and table need."""
+
+    item: int
+    part: str
+    quantity: int
+    material: Any          # prs_geom.model.design.Material
+    designation: str
+    description: str
+    #: the rigid body (scene name) whose volume is one piece's
+    body: str
+
+
+def part_items(design: Any) -> list[PartItem]:
+    """The items of the parts list of ``design``, numbered in order: screw, roller, nut and,
+    with the mechanism parts, carrier and retaining ring (the DIN 472 designation)."""
+    from prs_geom.geometry.mechanism import layout
+
     mats = design.materials
     d = design
     hand = d.thread.hand
     rows = [
-        ("screw", 1, mats.screw, vol["screw"], "",
+        ("screw", 1, mats.screw, "",
          f"screw, {d.screw.starts}-start {hand}-hand thread, pitch {d.thread.pitch_mm:g} mm, "
-         f"pitch diameter {d.screw.pitch_diameter_mm:g} mm, length {d.screw.length_mm:g} mm"),
-        ("roller", d.roller.count, mats.roller, vol["roller_0"], "",
+         f"pitch diameter {d.screw.pitch_diameter_mm:g} mm, length {d.screw.length_mm:g} mm", "screw"),
+        ("roller", d.roller.count, mats.roller, "",
          f"roller, single-start {hand}-hand thread, pitch diameter {d.roller.pitch_diameter_mm:g} mm, "
-         f"end gears and journals"),
-        ("nut", 1, mats.nut, vol["nut"], "",
+         f"end gears and journals", "roller_0"),
+        ("nut", 1, mats.nut, "",
          f"nut, {d.nut.starts}-start {hand}-hand internal thread, outside diameter {d.nut.outer_diameter_mm:g} mm, "
-         f"ring gears and retaining-ring grooves at both ends"),
+         f"ring gears and retaining-ring grooves at both ends", "nut"),
     ]
-    if "carrier_lo" in vol:
-        rows.append(("carrier", 2, mats.carrier, vol["carrier_lo"], "",
-                     f"carrier ring with {d.roller.count} journal bores"))
-    if "retaining_ring_lo" in vol:
-        rows.append(("retaining ring", 2, mats.retaining_ring, vol["retaining_ring_lo"], ring_designation or "",
-                     "internal retaining ring for bores"))
-    return [PartsListRow(i, part, qty, m.name, m.density_kg_m3, v, des, text)
-            for i, (part, qty, m, v, des, text) in enumerate(rows, start=1)]
+    lay = layout(design)
+    if lay is not None:
+        rows.append(("carrier", 2, mats.carrier, "", f"carrier ring with {d.roller.count} journal bores", "carrier_lo"))
+        rows.append(("retaining ring", 2, mats.retaining_ring, lay.ring.designation,
+                     "internal retaining ring for bores", "retaining_ring_lo"))
+    return [PartItem(i, *row) for i, row in enumerate(rows, start=1)]
+
+
+def parts_list(design: Any, asm: Any) -> list[PartsListRow]:
+    """The rows of the parts list of ``design`` from its placed assembly ``asm``."""
+    vol = body_volumes(asm)
+    return [PartsListRow(it.item, it.part, it.quantity, it.material.name, it.material.density_kg_m3,
+                         vol[it.body], it.designation, it.description) for it in part_items(design)]
 
 
 def _cell(v: Any) -> str:
@@ -168,6 +189,7 @@ def write_parts_list_xlsx(rows: list[PartsListRow], path: Path, design_name: str
                 ws.cell(row=ws.max_row, column=c).number_format = "0.0"
     ws.append(["", "total", sum(r.quantity for r in rows), "", "", "", "", sum(r.total_mass_kg for r in rows)])
     ws.cell(row=ws.max_row, column=8).number_format = "0.0000"
+    ws.freeze_panes = "A4"                   # title, column titles and keys stay
     for c, w in zip("ABCDEFGHIJ", (6, 16, 9, 18, 10, 14, 12, 12, 22, 70)):
         ws.column_dimensions[c].width = w
     _print_setup(ws, design_name, "parts list", version, date)

@@ -142,6 +142,14 @@ def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None
         write_stl(asm.parts[name], out / f"{name}.stl", stl_header(name, design_hash))
         what = "theoretical-pitch-diameter screw" if name == "screw" else name
         files[f"{name}.stl"] = f"{what} thread, part frame, binary STL (mm)"
+    for name, label in (("carrier", "carrier"), ("retaining_ring", "retaining ring")):
+        if f"{name}_lo" in asm.placed:
+            # one piece in its own frame: the lower copy moved so that its lower face is z = 0
+            mesh = asm.placed[f"{name}_lo"][0]
+            V = np.asarray(mesh.vertices, dtype=np.float64).copy()
+            V[:, 2] -= V[:, 2].min()
+            write_stl_pieces([(V, np.asarray(mesh.faces))], out / f"{name}.stl", stl_header(name, design_hash))
+            files[f"{name}.stl"] = f"{label} (one of two), part frame (z = 0 at its face toward the nut end), binary STL (mm)"
     if nominal_screw is not None:
         write_stl(nominal_screw, out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
         files["screw_nominal.stl"] = "nominal screw thread (not the analysed state), part frame, binary STL (mm)"

@@ -1,0 +1,313 @@
+"""Drawings of the mechanism parts: ``drawing_carrier.dxf``, ``drawing_nut_end.dxf`` and the
+assembly drawing ``drawing_assembly.dxf`` with item balloons matching the parts list; each a
+page of ``drawings.pdf`` after the thread parts (:func:`prs_geom.exports.drawing.write_drawings`).
+
+Conventions as :mod:`prs_geom.exports.drawing` (DXF R2010, mm, ISO A3 landscape paper space,
+the same layers, text heights, title block and deterministic header), with a layer
+BALLOONS. Sizes come from :func:`prs_geom.geometry.mechanism.layout`, so what is dimensioned
+is what is meshed and checked:
+
+* **carrier** (front view and the axial section through roller 0's bore): outside, bore
+  and pitch-circle diameters, the journal bore with its ISO 286 hole zone and limits, the
+  thickness; the z bores on the carrier angles in a note;
+* **nut end** (axial half-section of the lower end, X from the thread end = datum A
+  outward, Y the radius): the bore d1, the groove diameter d2 and width m (H13) with its
+  position from datum A, the edge distance n, the outside diameter, the end's length;
+* **assembly** (axial half-section of every part as its outline, upper half): one balloon
+  per parts-list item (item number in a circle, a leader to the part) and the parts list
+  table on the sheet.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from prs_geom._version import __version__
+from prs_geom.exports.drawing import (FRAME, NOTES, SHEET, TEXT_H, TITLE_H, _dim_override, _hatch,
+                                      _new_doc, _scale_text, _stamp, _title_block)
+from prs_geom.geometry.mechanism import MechanismLayout
+from prs_geom.model.design import PRSDesign
+from prs_geom.model.io import design_hash
+
+#: Mechanism drawings in sheet order: (key, file name).
+MECHANISM_DRAWINGS = (("carrier", "drawing_carrier.dxf"), ("nut_end", "drawing_nut_end.dxf"),
+                      ("assembly", "drawing_assembly.dxf"))
+#: Balloon circle diameter on paper (mm).
+BALLOON_D = 8.0
+SCALES = (4.0, 2.0, 1.0, 0.5, 0.25)
+
+
+def _fit_scale(width: float, height: float, box: tuple[float, float]) -> float:
+    for s in SCALES:
+        if width * s <= box[0] and height * s <= box[1]:
+            return s
+    return SCALES[-1]
+
+
+def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, str]], notes: list[str],
+           view_centre: tuple[float, float], scale: float, label: str, date: str) -> None:
+    """Paper space: frame, the viewport :data:`VIEW` at ``scale`` centred on ``view_centre``
+    (model mm), its label, the notes below it, the title block; header extents and stamp."""
+    import textwrap
+
+    from ezdxf import bbox
+
+    msp = doc.modelspace()
+    psp = doc.layouts.get("Layout1")
+    doc.layouts.rename("Layout1", name)
+    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
+    fx0, fy0, fx1, fy1 = FRAME
+    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
+                       dxfattribs={"layer": "TITLE", "const_width": 0.7})
+    vx0, vy0, vx1, vy1 = VIEW
+    k = 1.0 / scale
+    psp.add_viewport(center=(0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1)), size=(vx1 - vx0, vy1 - vy0),
+                     view_center_point=view_centre, view_height=(vy1 - vy0) * k, status=2,
+                     dxfattribs={"layer": "VIEWPORTS"})
+    psp.add_text(f"{label}  {_scale_text(scale)}", height=TITLE_H,
+                 dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
+    lines = [w for n in notes for w in textwrap.wrap(n, NOTES[2], subsequent_indent="  ")]
+    for i, n in enumerate(lines):
+        psp.add_text(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((25.0, 70.0 - 5.0 * i))
+    _title_block(psp, rows, title)
+    ext = bbox.extents(msp)
+    msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
+    cx, cy = view_centre
+    msp.dxf.limmin = (cx - 0.5 * SHEET[0] * k, cy - 0.5 * SHEET[1] * k)
+    msp.dxf.limmax = (cx + 0.5 * SHEET[0] * k, cy + 0.5 * SHEET[1] * k)
+    psp.dxf.limmin, psp.dxf.limmax = (0.0, 0.0), SHEET
+    psp.dxf.extmin, psp.dxf.extmax = (0.0, 0.0, 0.0), (SHEET[0], SHEET[1], 0.0)
+    doc.header["$EXTMIN"], doc.header["$EXTMAX"] = msp.dxf.extmin, msp.dxf.extmax
+    _stamp(doc, design, name, date)
+
+
+#: The one viewport of a mechanism sheet (paper mm): above the notes and the title block.
+VIEW = (25.0, 85.0, 405.0, 275.0)
+
+
+def _rows(design: PRSDesign, part: str, material, scale: float, date: str, version: str,
+          sheet: int) -> list[tuple[str, str]]:
+    return [("Design", design.name), ("Part", part), ("Material", material.name),
+            ("Density", f"{material.density_kg_m3:g} kg/m^3"), ("Scale", _scale_text(scale)), ("Units", "mm"),
+            ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
+            ("Sheet", f"{sheet}/{3 + len(MECHANISM_DRAWINGS)} A3")]
+
+
+def carrier_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version: str = __version__):
+    """The carrier: front view (left) and axial section through roller 0's bore (right)."""
+    from prs_geom.geometry.frames import carrier_angles
+
+    doc = _new_doc()
+    msp = doc.modelspace()
+    R, r_in, t = lay.carrier_outer_radius_mm, lay.carrier_inner_radius_mm, lay.carrier_thickness_mm
+    a, r_b = lay.centre_distance_mm, 0.5 * lay.journal_fit.nominal_diameter_mm
+    gap = 0.6 * R + 20.0
+    s = _fit_scale(2 * R + gap + t + 60.0, 2 * R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
+    k = 1.0 / s
+    ov = _dim_override(s)
+    lay_out = {"layer": "OUTLINE"}
+    # front view centred at the origin
+    msp.add_circle((0.0, 0.0), R, dxfattribs=lay_out)
+    msp.add_circle((0.0, 0.0), r_in, dxfattribs=lay_out)
+    for psi in carrier_angles(design):
+        msp.add_circle((a * math.cos(psi), a * math.sin(psi)), r_b, dxfattribs=lay_out)
+    msp.add_circle((0.0, 0.0), a, dxfattribs={"layer": "CENTER", "ltscale": 2.0 * k})
+    for ang in (0.0, 90.0):
+        c, si = math.cos(math.radians(ang)), math.sin(math.radians(ang))
+        msp.add_line((-(R + 4 * k) * c, -(R + 4 * k) * si), ((R + 4 * k) * c, (R + 4 * k) * si),
+                     dxfattribs={"layer": "CENTER", "ltscale": 2.0 * k})
+    msp.add_diameter_dim(center=(0.0, 0.0), radius=R, angle=135.0, text="%%c<> outside", override=ov,
+                         dxfattribs={"layer": "DIMENSIONS"}).render()
+    msp.add_diameter_dim(center=(0.0, 0.0), radius=r_in, angle=225.0, text="%%c<> bore", override=ov,
+                         dxfattribs={"layer": "DIMENSIONS"}).render()
+    fit = lay.journal_fit
+    hole = fit.fit.split("/")[0]
+    # the bore is drawn and dimensioned at its nominal size; the zone is in the notes (labels
+    # carry no digits, so a reader finds the dimension's value as the first number)
+    msp.add_diameter_dim(center=(a, 0.0), radius=0.5 * fit.nominal_diameter_mm, angle=60.0,
+                         text="%%c<> journal bores", override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
+    # section through roller 0's bore (psi = 0) to the right: X axial, Y radial (upper half
+    # through the bore, lower half at psi = 180 deg)
+    x0 = R + gap
+    def quad(y0: float, y1: float) -> list[tuple[float, float]]:
+        return [(x0, y0), (x0 + t, y0), (x0 + t, y1), (x0, y1)]
+    upper = [quad(r_in, a - r_b), quad(a + r_b, R)]
+    opposite_bore = any(abs(math.cos(p) + 1.0) < 1e-12 for p in carrier_angles(design))
+    lower = [quad(-(a - r_b), -r_in), quad(-R, -(a + r_b))] if opposite_bore else [quad(-R, -r_in)]
+    for q in upper + lower:
+        msp.add_lwpolyline(q, close=True, dxfattribs=lay_out)
+        _hatch(msp, [(x, y, 0.0) for x, y in q], s)
+    msp.add_line((x0 - 4 * k, 0.0), (x0 + t + 4 * k, 0.0), dxfattribs={"layer": "CENTER", "ltscale": 2.0 * k})
+    msp.add_line((x0 - 3 * k, a), (x0 + t + 3 * k, a), dxfattribs={"layer": "CENTER", "ltscale": 2.0 * k})
+    msp.add_linear_dim(base=(x0, R + 10 * k), p1=(x0, R), p2=(x0 + t, R), text="<> thickness", override=ov,
+                       dxfattribs={"layer": "DIMENSIONS"}).render()
+    msp.add_linear_dim(base=(x0 + t + 12 * k, 0.0), p1=(x0 + t, a), p2=(x0 + t, -a if opposite_bore else 0.0),
+                       angle=90.0, text="%%c<> pitch circle" if opposite_bore else "<> bore centre radius",
+                       override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
+    lim = fit.limits
+    notes = [f"{design.roller.count} journal bores equally spaced on the pitch circle at "
+             f"psi_k = 360 k / {design.roller.count} deg, bore 0 on the section plane",
+             f"Journal bores {design.roller.count}x %%c{fit.nominal_diameter_mm:g} {hole}: "
+             f"{fit.nominal_diameter_mm + lim.hole.lower_mm:.3f} "
+             f"to {fit.nominal_diameter_mm + lim.hole.upper_mm:.3f} mm; fit {fit.fit} with the roller journals, "
+             f"clearance {1e3 * fit.min_clearance_mm:.0f} to {1e3 * fit.max_clearance_mm:.0f} um",
+             f"Runs clear of the screw crest and the nut bore by "
+             f"{design.mechanism.carrier_radial_clearance_mm:g} mm on the radius"
+             if design.mechanism.carrier_guidance == "clear" else
+             f"Guided in the nut bore: fit {lay.carrier_fit.fit}",
+             "Parts list item 4 (2 off)"]
+    _sheet(doc, "A3_CARRIER", design, f"PRS CARRIER - {design.name}",
+           _rows(design, "carrier", design.materials.carrier, s, date, version, 4), notes,
+           (0.5 * (-R + x0 + t) + 10 * k, 0.0), s, "FRONT VIEW and SECTION through a journal bore", date)
+    return doc
+
+
+def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version: str = __version__):
+    """The lower nut end in axial half-section, X = outward distance from datum A (the
+    thread's end face), with the retaining-ring groove."""
+    doc = _new_doc()
+    msp = doc.modelspace()
+    end = lay.ends[0]
+    length = end.nut_end[1] - end.nut_end[0]
+    R = lay.nut_outer_radius_mm
+    w = lay.gear_face_width_mm
+    ring = lay.ring
+    d1, d2 = ring.bore_mm, ring.groove_diameter_mm
+    g_in = -end.groove[1]        # groove flank distances from datum A (X outward)
+    g_out = -end.groove[0]
+    gear_root = R - 0.0
+    if lay.ring_gear_outer_radius_mm is not None:
+        from prs_geom.geometry.gears import design_gear_pair
+
+        pair = design_gear_pair(design)
+        gear_root = pair.ring.root_radius_mm
+    s = _fit_scale(length + 80.0, R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
+    k = 1.0 / s
+    ov = _dim_override(s)
+    r1 = 0.5 * d1
+    pts = [(0.0, R), (length, R), (length, r1), (g_out, r1), (g_out, 0.5 * d2), (g_in, 0.5 * d2), (g_in, r1)]
+    if w > 0.0:
+        pts += [(w, r1), (w, gear_root), (0.0, gear_root)]
+    else:
+        pts += [(0.0, r1)]
+    msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "OUTLINE"})
+    _hatch(msp, [(x, y, 0.0) for x, y in pts], s)
+    msp.add_line((-6 * k, 0.0), (length + 6 * k, 0.0), dxfattribs={"layer": "CENTER", "ltscale": 4.0 * k})
+    dim = {"override": ov, "dxfattribs": {"layer": "DIMENSIONS"}}
+    msp.add_linear_dim(base=(0.0, R + 10 * k), p1=(0.0, R), p2=(length, R), text="<> nut end", **dim).render()
+    msp.add_linear_dim(base=(0.0, R + 20 * k), p1=(0.0, R), p2=(g_in, 0.5 * d2),
+                       text="<> to groove (from A)", **dim).render()
+    msp.add_linear_dim(base=(g_in, 0.5 * d2 - 8 * k), p1=(g_in, 0.5 * d2), p2=(g_out, 0.5 * d2),
+                       text="m <>", **dim).render()
+    msp.add_linear_dim(base=(g_out, r1 - 14 * k), p1=(g_out, r1), p2=(length, r1), text="n <> min", **dim).render()
+    # diameters of the half-section: the dimension line runs across the axis to the mirror
+    # point, as on a half-section drawing
+    for i, (label, r) in enumerate((("%%c<> outside", R), ("%%c<> groove", 0.5 * d2), ("%%c<> bore", r1))):
+        xb = length + (12.0 + 12.0 * i) * k
+        msp.add_linear_dim(base=(xb, 0.0), p1=(length, r), p2=(length, -r), angle=90.0, text=label,
+                           **dim).render()
+    tol = ""
+    if ring.groove_upper_mm is not None:
+        tol = f" (+{ring.groove_upper_mm:g}/{ring.groove_lower_mm:+g})"
+    notes = ["Datum A: the nut thread's end face (tooth 1 end, z = 0); X outward from it",
+             f"Groove for {ring.designation}: d2 {d2:g}{tol}, m {ring.groove_width_mm:g} H13 "
+             f"(max {ring.groove_width_max_mm:.3f}), n >= {ring.edge_distance_mm:g}",
+             f"Ring gear in the first {w:g} mm (root diameter {2 * gear_root:.3f}): see the nut drawing"
+             if w > 0 else "No ring gear",
+             "The upper end is the mirror image about the nut's mid-plane; parts list item 3"]
+    _sheet(doc, "A3_NUT_END", design, f"PRS NUT END - {design.name}",
+           _rows(design, "nut end", design.materials.nut, s, date, version, 5), notes,
+           (0.5 * length + 20 * k, 0.5 * R), s, "SECTION (axial, upper half) of the nut end", date)
+    return doc
+
+
+def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], date: str,
+                     version: str = __version__):
+    """Axial half-section outlines of every part (screw frame, upper half) with one balloon
+    per parts-list item (``parts``: :class:`~prs_geom.exports.bom.PartItem`) and the
+    parts list on the sheet."""
+    from prs_geom.geometry.frames import screw_z_range
+
+    doc = _new_doc()
+    doc.layers.add("BALLOONS", color=7)
+    msp = doc.modelspace()
+    L = design.thread.engaged_teeth * design.thread.pitch_mm
+    lo, hi = lay.ends[0].nut_end[0], lay.ends[1].nut_end[1]
+    zs0, zs1 = screw_z_range(design)
+    R = lay.nut_outer_radius_mm
+    a = lay.centre_distance_mm
+    s = _fit_scale(max(hi, zs1) - min(lo, zs0) + 60.0, R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
+    k = 1.0 / s
+    out = {"layer": "OUTLINE"}
+
+    def rect(z0: float, z1: float, r0: float, r1: float) -> list[tuple[float, float]]:
+        q = [(z0, r0), (z1, r0), (z1, r1), (z0, r1)]
+        msp.add_lwpolyline(q, close=True, dxfattribs=out)
+        return q
+
+    rs_major = 0.5 * design.screw.major_diameter_mm
+    rr_major = 0.5 * design.roller.major_diameter_mm
+    rn_minor = 0.5 * design.nut.minor_diameter_mm
+    w = lay.gear_face_width_mm
+    rj = 0.5 * lay.journal_diameter_mm
+    targets = {}
+    targets["screw"] = (0.5 * (zs0 + zs1), 0.5 * rs_major)
+    rect(zs0, zs1, 0.0, rs_major)
+    # roller 0 in the section plane: thread envelope, gears, journals
+    rect(-w, L + w, a - rr_major, a + rr_major)
+    for e in lay.ends:
+        rect(e.journal[0], e.journal[1], a - rj, a + rj)
+    targets["roller"] = (0.5 * L, a + 0.5 * rr_major)
+    # nut: threaded body and the two ends (bore)
+    rect(0.0, L, rn_minor, R)
+    for e in lay.ends:
+        z0, z1 = e.nut_end
+        rect(z0, z1, lay.nut_bore_radius_mm, R)
+        rect(*e.carrier, lay.carrier_inner_radius_mm, lay.carrier_outer_radius_mm)
+        rect(*e.ring, lay.ring_inner_radius_mm, lay.ring_outer_radius_mm)
+    targets["nut"] = (0.5 * L, 0.5 * (rn_minor + R))
+    c = lay.ends[0].carrier
+    targets["carrier"] = (0.5 * (c[0] + c[1]), 0.5 * (lay.carrier_inner_radius_mm + a - rj))
+    rz = lay.ends[0].ring
+    targets["retaining ring"] = (0.5 * (rz[0] + rz[1]), 0.5 * (lay.ring_inner_radius_mm + lay.ring_outer_radius_mm))
+    msp.add_line((min(lo, zs0) - 6 * k, 0.0), (max(hi, zs1) + 6 * k, 0.0),
+                 dxfattribs={"layer": "CENTER", "ltscale": 4.0 * k})
+    ov = _dim_override(s)
+    msp.add_linear_dim(base=(lo, -8 * k), p1=(lo, 0.0), p2=(hi, 0.0), text="<> nut overall", override=ov,
+                       dxfattribs={"layer": "DIMENSIONS"}).render()
+    # balloons above the parts, left to right in item order, each with a leader to its part
+    top = R + 18.0 * k
+    span = max(hi, zs1) - min(lo, zs0)
+    for i, row in enumerate(parts):
+        tx, ty = targets[row.part]
+        bx = min(lo, zs0) + span * (i + 0.5) / len(parts)
+        r_b = 0.5 * BALLOON_D * k
+        msp.add_circle((bx, top), r_b, dxfattribs={"layer": "BALLOONS"})
+        msp.add_text(str(row.item), height=TEXT_H * k, dxfattribs={"layer": "BALLOONS"}).set_placement(
+            (bx, top), align=_middle())
+        dx, dy = tx - bx, ty - top
+        d = math.hypot(dx, dy)
+        msp.add_line((bx + r_b * dx / d, top + r_b * dy / d), (tx, ty), dxfattribs={"layer": "BALLOONS"})
+        msp.add_circle((tx, ty), 0.6 * k, dxfattribs={"layer": "BALLOONS"})     # the leader's dot
+    notes = ["Parts list (item, part, quantity, material, designation):"] + [
+        f"  {r.item}  {r.part}  x{r.quantity}  {r.material.name}" + (f"  {r.designation}" if r.designation else "")
+        for r in parts] + ["Outlines: thread envelopes at the crest diameters; roller 0 in the section plane"]
+    _sheet(doc, "A3_ASSEMBLY", design, f"PRS ASSEMBLY - {design.name}",
+           _rows(design, "assembly", design.materials.nut, s, date, version, 6), notes,
+           (0.5 * (min(lo, zs0) + max(hi, zs1)), 0.5 * R + 8 * k), s, "ASSEMBLY (axial half-section)", date)
+    return doc
+
+
+def _middle():
+    from ezdxf.enums import TextEntityAlignment
+
+    return TextEntityAlignment.MIDDLE_CENTER
+
+
+def mechanism_drawings(design: PRSDesign, lay: MechanismLayout, parts: list[Any], date: str,
+                       version: str = __version__) -> dict[str, Any]:
+    """The three ezdxf documents keyed by file name, in sheet order."""
+    return {"drawing_carrier.dxf": carrier_drawing(design, lay, date, version),
+            "drawing_nut_end.dxf": nut_end_drawing(design, lay, date, version),
+            "drawing_assembly.dxf": assembly_drawing(design, lay, parts, date, version)}
