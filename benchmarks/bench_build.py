@@ -79,7 +79,7 @@ def mesh_job(tol: float | None, out: Path) -> None:
 #: meshes stage calls it, not inside the interference check (bound before the patch).
 EXPORTERS = [("prs_geom.mesh.assembly", "build_assembly", "meshing"),
              ("prs_geom.exports.meshes", "export_meshes", "mesh files"),
-             ("prs_geom.exports.drawing", "write_drawings", "drawings"),
+             ("prs_geom.exports.mechanism_drawing", "write_all_drawings", "drawings"),
              ("prs_geom.exports.dxf", "write_dxf", "sheets and DXF"),
              ("prs_geom.exports.sheets", "write_xlsx", "sheets and DXF"),
              ("prs_geom.exports.sheets", "sheet_csv", "sheets and DXF"),

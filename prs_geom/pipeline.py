@@ -250,9 +250,9 @@ def stage_contact(ctx: BuildContext) -> None:
     if ctx.runs("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.contact, progress=True)
     if ctx.runs("manufacturing"):
-        from prs_geom.exports.drawing import write_drawings
+        from prs_geom.exports.mechanism_drawing import write_all_drawings
 
-        ctx.submit("manufacturing", write_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
+        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
 
 
 def stage_gears(ctx: BuildContext) -> None:
@@ -385,6 +385,16 @@ def stage_meshes(ctx: BuildContext) -> None:
             section["parts"][part] = {**one["parts"][part], "file": one["file"]}
             if one["file"]:
                 section["files"].append(one["file"])
+        from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids
+        from prs_geom.geometry.mechanism import layout
+
+        if layout(d) is not None:
+            # the carrier and the ring as exact B-reps (circles and planes), a file each
+            for part in MECHANISM_STEP_PARTS:
+                one = write_solids([mechanism_step_solid(d, part)], ctx.out / f"{part}.step")
+                section["parts"][part] = {**one["parts"][part], "file": one["file"]}
+                if one["file"]:
+                    section["files"].append(one["file"])
         ctx.report["step"] = section
         ctx.report["files"] += section["files"]
         for part, row in section["parts"].items():

@@ -191,3 +191,23 @@ def test_build_reports_the_mechanism(default_build):
     html = (out / "report.html").read_text(encoding="utf-8")
     assert "id='parts-list'" in html and "id='mechanism'" in html
     assert rep["parts_list"][4]["designation"] in html
+
+
+def test_carrier_guided_in_the_nut_bore():
+    """carrier_guidance = "nut": the carrier's outside runs in the nut end bore with H8/f7.
+    ISO 286-2: H8 over 30 up to 50 mm is +39/0 um, f7 is -25/-50 um, so the DIN 472 41 mm
+    bore gives 25 to 89 um diametral clearance; the meshes sit at the middle of both zones."""
+    from prs_geom.model.design import MechanismSettings
+
+    d = PRSDesign(mechanism=MechanismSettings(carrier_guidance="nut"))
+    lay = layout(d)
+    f = lay.carrier_fit
+    assert f is not None and f.fit == "H8/f7" and f.nominal_diameter_mm == lay.ring.bore_mm == 41.0
+    assert (f.min_clearance_mm, f.max_clearance_mm) == pytest.approx((0.025, 0.089))
+    assert 2 * lay.carrier_outer_radius_mm == pytest.approx(41.0 - 0.0375)
+    assert 2 * lay.nut_bore_radius_mm == pytest.approx(41.0 + 0.0195)
+    asm = build_assembly(d, tol=TOL, screw_profile=theoretical_screw(d).profile)
+    sec = mechanism_section(asm, lay, lay.ring.designation)
+    assert [c["name"] for c in sec["checks"]][:2] == ["fit: roller journal in carrier bore", "fit: carrier in nut bore"]
+    assert sec["passed"]
+    assert check_assembly(asm, TOL)["found"] is False

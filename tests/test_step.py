@@ -368,9 +368,22 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
     d = PRSDesign(name="steptest", thread=Thread(engaged_teeth=6),
                   mesh=MeshSettings(chord_tolerance_mm=0.02))
     report = build(d, tmp_path / "out", options=BuildOptions(step=True))
-    assert report["step"]["files"] == ["screw.step", "roller.step", "nut.step"]
+    assert report["step"]["files"] == ["screw.step", "roller.step", "nut.step", "carrier.step",
+                                       "retaining_ring.step"]
     assert set(report["files"]) >= set(report["step"]["files"])
     assert all(row["valid"] and abs(row["volume_rel_diff"]) < 1e-3 for row in report["step"]["parts"].values())
-    for part in ("screw", "roller", "nut"):
+    for part in ("screw", "roller", "nut", "carrier", "retaining_ring"):
         back = read_step(tmp_path / "out" / f"{part}.step")
         assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)
+    # the mechanism parts are exact B-reps: volume read back = the closed form of the true
+    # circles (docs/theory/mechanism.md), which their polygon meshes approach within 0.1 %
+    from prs_geom.exports.step import shape_volume
+    from prs_geom.geometry.mechanism import layout
+
+    lay = layout(d)
+    for part, exact in (("carrier", lay.carrier_volume_mm3), ("retaining_ring", lay.ring_volume_mm3)):
+        back = read_step(tmp_path / "out" / f"{part}.step")
+        assert shape_volume(back.shapes[0]) == pytest.approx(exact, rel=1e-9)
+        row = report["step"]["parts"][part]
+        assert row["analytic_volume_mm3"] == pytest.approx(exact, rel=1e-12)
+        assert abs(row["volume_mm3"] - row["mesh_volume_mm3"]) <= 1e-3 * exact

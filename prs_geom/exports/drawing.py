@@ -502,11 +502,11 @@ def _render_pages(docs: list, path: Path) -> None:
 
 
 def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
-                   version: str = __version__, pdf: bool = True) -> list[str]:
-    """Write ``drawing_screw.dxf``, ``drawing_roller.dxf``, ``drawing_nut.dxf``, with the
-    mechanism parts ``drawing_carrier.dxf``, ``drawing_nut_end.dxf`` and
-    ``drawing_assembly.dxf`` (:mod:`prs_geom.exports.mechanism_drawing`), and (``pdf``)
-    ``drawings.pdf`` (a page each) into ``out_dir``; ``contact`` is the contact stage's
+                   version: str = __version__, pdf: bool = True, extra: dict | None = None) -> list[str]:
+    """Write ``drawing_screw.dxf``, ``drawing_roller.dxf``, ``drawing_nut.dxf``, the documents
+    of ``extra`` ({file name: ezdxf document}, e.g. the mechanism drawings of
+    :func:`prs_geom.exports.mechanism_drawing.write_all_drawings`) and (``pdf``)
+    ``drawings.pdf`` (a page each, in that order) into ``out_dir``; ``contact`` is the contact stage's
     :class:`~prs_geom.analysis.contact.ContactResult` (theoretical screw). Returns the file
     names written."""
     from prs_geom.exports.dxf import save_dxf
@@ -518,18 +518,10 @@ def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
         save_dxf(doc, out / drawing_name(part))
         names.append(drawing_name(part))
         docs.append(doc)
-    from prs_geom.geometry.mechanism import layout
-
-    lay = layout(design)
-    if lay is not None:
-        # the carrier, the nut end and the assembly with balloons (prs_geom.exports.mechanism_drawing)
-        from prs_geom.exports.bom import part_items
-        from prs_geom.exports.mechanism_drawing import mechanism_drawings
-
-        for name, doc in mechanism_drawings(design, lay, part_items(design), date, version).items():
-            save_dxf(doc, out / name)
-            names.append(name)
-            docs.append(doc)
+    for name, doc in (extra or {}).items():
+        save_dxf(doc, out / name)
+        names.append(name)
+        docs.append(doc)
     if pdf:
         render_pdf(docs, out / DRAWING_PDF)
         names.append(DRAWING_PDF)

@@ -1,6 +1,6 @@
 """Drawings of the mechanism parts: ``drawing_carrier.dxf``, ``drawing_nut_end.dxf`` and the
 assembly drawing ``drawing_assembly.dxf`` with item balloons matching the parts list; each a
-page of ``drawings.pdf`` after the thread parts (:func:`prs_geom.exports.drawing.write_drawings`).
+page of ``drawings.pdf`` after the thread parts (:func:`write_all_drawings`).
 
 Conventions as :mod:`prs_geom.exports.drawing` (DXF R2010, mm, ISO A3 landscape paper space,
 the same layers, text heights, title block and deterministic header), with a layer
@@ -311,3 +311,17 @@ def mechanism_drawings(design: PRSDesign, lay: MechanismLayout, parts: list[Any]
     return {"drawing_carrier.dxf": carrier_drawing(design, lay, date, version),
             "drawing_nut_end.dxf": nut_end_drawing(design, lay, date, version),
             "drawing_assembly.dxf": assembly_drawing(design, lay, parts, date, version)}
+
+
+def write_all_drawings(design: PRSDesign, contact: Any, out_dir: Path | str, date: str,
+                       version: str = __version__, pdf: bool = True) -> list[str]:
+    """The build's drawings: the thread parts' (:func:`prs_geom.exports.drawing.write_drawings`)
+    and, when the design has them, the carrier, nut end and assembly drawings, all as pages
+    of ``drawings.pdf``. Returns the file names written."""
+    from prs_geom.exports.bom import part_items
+    from prs_geom.exports.drawing import write_drawings
+    from prs_geom.geometry.mechanism import layout
+
+    lay = layout(design)
+    extra = mechanism_drawings(design, lay, part_items(design), date, version) if lay is not None else None
+    return write_drawings(design, contact, out_dir, date, version, pdf, extra)

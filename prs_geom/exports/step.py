@@ -1038,3 +1038,80 @@ def write_solids(solids: Sequence[StepSolid], path: str | os.PathLike) -> dict[s
     section["file"] = path.name
     section["written"] = [s.part for s in good]
     return section
+
+
+# --------------------------------------------------------------------------- mechanism parts
+#: The mechanism parts with a STEP file of their own (the journals and nut ends belong to the
+#: roller's and the nut's bodies, whose STEP solids are the threads).
+MECHANISM_STEP_PARTS = ("carrier", "retaining_ring")
+
+
+def mechanism_step_solid(design: "PRSDesign", part: str) -> StepSolid:
+    """The carrier or the retaining ring (:mod:`prs_geom.geometry.mechanism`) as an exact
+    B-rep: circular cylinders and planes (OpenCascade primitives and booleans), in its own
+    frame (z = 0 at its face toward the nut end, as ``<part>.stl``), at the modelled sizes
+    (fitted features at the middle of their ISO 286 zone).
+
+    ``mesh_volume_mm3`` is the volume of the part's mesh (polygons at <= 1 um) and
+    ``analytic_volume_mm3`` the closed form; the B-rep's volume must agree with the closed
+    form within ``VOLUME_REL_LIMIT``.
+    """
+    import time
+
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    from prs_geom.geometry.frames import carrier_angles
+    from prs_geom.geometry.mechanism import RING_GAP_RAD, layout
+    from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, mechanism_meshes
+
+    require_ocp()
+    t0 = time.perf_counter()
+    lay = layout(design)
+    if lay is None or part not in MECHANISM_STEP_PARTS:
+        raise ValueError(f"no mechanism part {part!r} in this design (mechanism.enabled and one of "
+                         f"{', '.join(MECHANISM_STEP_PARTS)})")
+
+    def cylinder(r: float, h: float, x: float = 0.0, y: float = 0.0, z: float = 0.0, angle: float | None = None,
+                 x_dir: tuple[float, float, float] = (1.0, 0.0, 0.0)):
+        ax = gp_Ax2(gp_Pnt(x, y, z), gp_Dir(0.0, 0.0, 1.0), gp_Dir(*x_dir))
+        maker = BRepPrimAPI_MakeCylinder(ax, r, h) if angle is None else BRepPrimAPI_MakeCylinder(ax, r, h, angle)
+        return maker.Shape()
+
+    def cut(a, b):
+        op = BRepAlgoAPI_Cut(a, b)
+        op.Build()
+        return op.Shape()
+
+    # the cutters run one unit past both end faces, so no cut face is coplanar with one
+    if part == "carrier":
+        h = lay.carrier_thickness_mm
+        shape = cut(cylinder(lay.carrier_outer_radius_mm, h), cylinder(lay.carrier_inner_radius_mm, h + 2.0, z=-1.0))
+        r_b = 0.5 * lay.journal_fit.hole_diameter_mm
+        a = lay.centre_distance_mm
+        for psi in carrier_angles(design):
+            shape = cut(shape, cylinder(r_b, h + 2.0, a * math.cos(psi), a * math.sin(psi), -1.0))
+        exact = lay.carrier_volume_mm3
+    else:
+        h = lay.ring.thickness_mm
+        half = 0.5 * RING_GAP_RAD
+        # a partial cylinder from the gap's edge round to its other edge, less the inner one
+        outer = cylinder(lay.ring_outer_radius_mm, h, angle=2.0 * math.pi - RING_GAP_RAD,
+                         x_dir=(math.cos(half), math.sin(half), 0.0))
+        shape = cut(outer, cylinder(lay.ring_inner_radius_mm, h + 2.0, z=-1.0))
+        exact = lay.ring_volume_mm3
+    mesh = mechanism_meshes(design, lay, MECHANISM_CHORD_MM)[f"{part}_lo"]
+    mesh_volume = float(mesh.volume)
+    volume = shape_volume(shape)
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SOLID
+
+    solids, faces = _count(shape, TopAbs_SOLID), _count(shape, TopAbs_FACE)
+    ok = is_valid_shape(shape) and solids == 1
+    rel = (volume - exact) / exact
+    reason = "" if ok and abs(rel) <= VOLUME_REL_LIMIT else (
+        "not one valid solid" if not ok else f"volume {volume:.6g} mm^3 differs from the closed form by {rel:.2e}")
+    return StepSolid(part, shape, not reason, reason, volume, mesh_volume, (volume - mesh_volume) / mesh_volume,
+                     occ_bbox(shape), time.perf_counter() - t0, faces, chord_tolerance_mm=0.0,
+                     mesh_tolerance_mm=MECHANISM_CHORD_MM, max_deviation_mm=0.0, analytic_volume_mm3=exact,
+                     design_mesh_volume_mm3=mesh_volume, deviation_target_mm=0.0, max_tolerance_mm=math.nan)

@@ -265,32 +265,30 @@ def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progres
         z = np.asarray(table[key].vertices)[:, 2]
         return bool(z.max() > gear_window[0] and z.min() < gear_window[1])
 
+    def put(table: dict[str, trimesh.Trimesh] | None, key: str, name: str, T: NDArray[np.float64],
+            kind: str) -> None:
+        """Place ``table[key]`` as ``name`` at ``T`` (low end, then high end) when wanted."""
+        for side in ("lo", "hi"):
+            if wanted(table, key.format(side=side)):
+                asm.placed[name.format(side=side)] = (table[key.format(side=side)], T, kind)
+
     if "screw" in parts:
         asm.placed["screw"] = (parts["screw"].to_trimesh(), I, "thread")
     if "nut" in parts:
         asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
-    for side in ("lo", "hi"):
-        if wanted(gear_parts, f"ring_{side}"):
-            asm.placed[f"nut_ring_gear_{side}"] = (gear_parts[f"ring_{side}"], I, "gear")
-    for side in ("lo", "hi"):
-        if wanted(mech_parts, f"nut_end_{side}"):
-            asm.placed[f"nut_end_{side}"] = (mech_parts[f"nut_end_{side}"], I, "mechanism")
+    put(gear_parts, "ring_{side}", "nut_ring_gear_{side}", I, "gear")
+    put(mech_parts, "nut_end_{side}", "nut_end_{side}", I, "mechanism")
     roller_tm = parts["roller"].to_trimesh() if "roller" in parts else None
     z = design.roller.count
     for k in range(z):
         T = roller_transform(design, k)
         if roller_tm is not None:
             asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
-        for side in ("lo", "hi"):
-            if wanted(gear_parts, f"roller_{side}"):
-                asm.placed[f"roller_{k}_gear_{side}"] = (gear_parts[f"roller_{side}"], T, "gear")
-        for side in ("lo", "hi"):
-            if wanted(mech_parts, f"journal_{side}"):
-                asm.placed[f"roller_{k}_journal_{side}"] = (mech_parts[f"journal_{side}"], T, "mechanism")
+        put(gear_parts, "roller_{side}", f"roller_{k}_gear_{{side}}", T, "gear")
+        put(mech_parts, "journal_{side}", f"roller_{k}_journal_{{side}}", T, "mechanism")
         progress("placing rollers", k + 1, z)
-    for name in ("carrier_lo", "carrier_hi", "retaining_ring_lo", "retaining_ring_hi"):
-        if wanted(mech_parts, name):
-            asm.placed[name] = (mech_parts[name], I, "mechanism")
+    put(mech_parts, "carrier_{side}", "carrier_{side}", I, "mechanism")
+    put(mech_parts, "retaining_ring_{side}", "retaining_ring_{side}", I, "mechanism")
 
 
 def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float],
