@@ -375,26 +375,24 @@ def stage_meshes(ctx: BuildContext) -> None:
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.report["files"].append(name)
     if ctx.options.step:
-        from prs_geom.exports.step import write_step
+        from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids, write_step
 
         # one file per part, named like its STL (the CAD habit: a part, a file)
         section: dict[str, Any] = {"files": [], "parts": {}}
-        for part in ("screw", "roller", "nut"):
-            one = write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.contact.screw_profile)
+
+        def record(part: str, one: dict[str, Any]) -> None:
             section.update({k: v for k, v in one.items() if k not in ("file", "written", "parts")})
             section["parts"][part] = {**one["parts"][part], "file": one["file"]}
             if one["file"]:
                 section["files"].append(one["file"])
-        from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids
-        from prs_geom.geometry.mechanism import layout
 
-        if layout(d) is not None:
-            # the carrier and the ring as exact B-reps (circles and planes), a file each
-            for part in MECHANISM_STEP_PARTS:
-                one = write_solids([mechanism_step_solid(d, part)], ctx.out / f"{part}.step")
-                section["parts"][part] = {**one["parts"][part], "file": one["file"]}
-                if one["file"]:
-                    section["files"].append(one["file"])
+        for part in ("screw", "roller", "nut"):
+            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.contact.screw_profile))
+        # the carrier and the ring (when the design has them) as exact B-reps, a file each
+        for part in MECHANISM_STEP_PARTS:
+            if f"{part}_lo" in asm.placed:
+                record(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
+                                          ctx.out / f"{part}.step"))
         ctx.report["step"] = section
         ctx.report["files"] += section["files"]
         for part, row in section["parts"].items():

@@ -27,18 +27,14 @@ from numpy.typing import NDArray
 
 from prs_geom.geometry.profiles import ThreadProfile
 from prs_geom.mesh.assembly import Assembly, build_assembly
+from prs_geom.mesh.thread import from_manifold, to_manifold
 from prs_geom.analysis.contact import theoretical_screw
 from prs_geom.model.design import PRSDesign
 from prs_geom.checks.fcl import bvh_model
-from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, CHECK_WINDOW_TEETH, check_windows
+from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, check_windows
 from prs_geom.progress import ProgressFn, silent
 
 MAX_CONTACTS = 20000
-
-
-def _manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
-    return manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(mesh.vertices, dtype=np.float64),
-                                                 np.ascontiguousarray(mesh.faces, dtype=np.uint64)))
 
 
 @dataclass(frozen=True)
@@ -78,9 +74,7 @@ def _trimmed(inter: manifold3d.Manifold, slab: tuple[float, float]) -> tuple[flo
         piece = piece.trim_by_plane((0.0, 0.0, -1.0), -hi)
     if piece.is_empty():
         return 0.0, 0.0
-    m = piece.to_mesh64()
-    V = np.asarray(m.vert_properties)[:, :3]
-    F = np.asarray(m.tri_verts, dtype=np.int64)
+    V, F = from_manifold(piece)
     tri = V[F]
     area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     z = tri[:, :, 2]
@@ -96,6 +90,27 @@ def _merge(a: _Overlap | None, b: _Overlap | None) -> _Overlap | None:
     if a is None or b is None:
         return a if b is None else b
     return _Overlap(np.concatenate([a.contact_z, b.contact_z]), a.volume + b.volume, a.area + b.area)
+
+
+def body_pairs(names: list[str]) -> list[tuple[str, str]]:
+    """Every pair of scene parts (in ``names`` order) that belong to different rigid bodies
+    (:meth:`~prs_geom.mesh.assembly.Assembly.rigid_body`)."""
+    return [(a, b) for i, a in enumerate(names) for b in names[i + 1:]
+            if Assembly.rigid_body(a) != Assembly.rigid_body(b)]
+
+
+def _corrected_profile(design: PRSDesign, screw: str, given: ThreadProfile | None) -> ThreadProfile | None:
+    """The screw profile a check uses: ``given`` or the theoretical one for "corrected",
+    None (the design's nominal screw) for "nominal"."""
+    if screw != "corrected":
+        return None
+    return given if given is not None else theoretical_screw(design).profile
+
+
+def _screw_fields(design: PRSDesign, screw: str, prof: ThreadProfile | None) -> dict[str, Any]:
+    """The fields naming the screw of one check (``screw``, ``screw_pitch_diameter_mm``)."""
+    return {"screw": screw,
+            "screw_pitch_diameter_mm": 2.0 * (prof.pitch_radius if prof else 0.5 * design.screw.pitch_diameter_mm)}
 
 
 def pair_overlaps(asm: Assembly, progress: ProgressFn = silent,
@@ -114,9 +129,7 @@ def pair_overlaps(asm: Assembly, progress: ProgressFn = silent,
     bases: dict[int, tuple[trimesh.Trimesh, manifold3d.Manifold]] = cache.setdefault("solid", {})
     # None: FCL found no collision
     outcomes: dict[_PairKey, _Overlap | None] = cache.setdefault("pair", {})
-    names = list(asm.placed)
-    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]
-             if asm.rigid_body(a) != asm.rigid_body(b)]
+    pairs = body_pairs(list(asm.placed))
     objs: dict[str, fcl.CollisionObject] = {}
 
     def collision_object(name: str) -> fcl.CollisionObject:
@@ -131,7 +144,7 @@ def pair_overlaps(asm: Assembly, progress: ProgressFn = silent,
     def solid(name: str) -> manifold3d.Manifold:
         mesh, T, _ = asm.placed[name]
         if id(mesh) not in bases:
-            bases[id(mesh)] = (mesh, _manifold(mesh))
+            bases[id(mesh)] = (mesh, to_manifold(mesh.vertices, mesh.faces))
         return bases[id(mesh)][1].transform(np.ascontiguousarray(T[:3, :4]))
 
     def outcome(a: str, b: str) -> _Overlap | None:
@@ -161,7 +174,7 @@ def pair_overlaps(asm: Assembly, progress: ProgressFn = silent,
 
 
 def _section(design: PRSDesign, overlaps: dict[tuple[str, str], _Overlap | None], tol: float,
-             t0: float) -> dict[str, Any]:
+             seconds: float) -> dict[str, Any]:
     """The ``checks.interference`` fields of one screw from the pair overlaps (pair order)."""
     p = design.thread.pitch_mm
     found, touching = [], []
@@ -182,7 +195,7 @@ def _section(design: PRSDesign, overlaps: dict[tuple[str, str], _Overlap | None]
         "pairs_checked": len(overlaps),
         "chord_tolerance_mm": tol,
         "rule": "overlap thicker than 2 x chord tolerance (mean thickness 2V/A) is interference",
-        "time_s": time.perf_counter() - t0,
+        "time_s": seconds,
     }
 
 
@@ -214,7 +227,8 @@ def check_assembly(asm: Assembly, tol: float, progress: ProgressFn = silent,
         ``contact_within_tolerance``, ...).
     """
     t0 = time.perf_counter()
-    return _section(asm.design, pair_overlaps(asm, progress, cache), tol, t0)
+    overlaps = pair_overlaps(asm, progress, cache)
+    return _section(asm.design, overlaps, tol, time.perf_counter() - t0)
 
 
 def interference(design: PRSDesign, screw: str = "corrected", tol: float | None = None,
@@ -222,14 +236,11 @@ def interference(design: PRSDesign, screw: str = "corrected", tol: float | None 
     """Interference check with the ``"corrected"`` (theoretical) or ``"nominal"`` screw.
 
     The corrected screw's profile is ``screw_profile`` (from the contact stage; solved here
-    when not given). A design longer than :data:`CHECK_WINDOW_TEETH` teeth is checked in
+    when not given). A design longer than :data:`~prs_geom.mesh.budget.CHECK_WINDOW_TEETH` teeth is checked in
     axial windows (:func:`windowed_interference_checks`) unless ``tol`` is given.
     """
     if tol is None and check_windows(design) is not None:
-        prof = None
-        if screw == "corrected":
-            prof = screw_profile if screw_profile is not None else theoretical_screw(design).profile
-        return _windowed(design, prof, progress, (screw,))[screw]
+        return _windowed(design, _corrected_profile(design, screw, screw_profile), progress, (screw,))[screw]
     return _interference(design, screw, tol, progress, screw_profile)[0]
 
 
@@ -239,13 +250,10 @@ def _interference(design: PRSDesign, screw: str, tol: float | None, progress: Pr
     """:func:`interference` and its assembly; ``reuse``/``cache``: see
     :func:`~prs_geom.mesh.assembly.build_assembly` and :func:`check_assembly`."""
     tol = tol or min(design.mesh.chord_tolerance_mm, CHECK_TOLERANCE_MM)
-    prof = None
-    if screw == "corrected":
-        prof = screw_profile if screw_profile is not None else theoretical_screw(design).profile
+    prof = _corrected_profile(design, screw, screw_profile)
     asm = build_assembly(design, tol=tol, screw_profile=prof, progress=progress, reuse=reuse)
     out = check_assembly(asm, tol, progress, cache)
-    out["screw"] = screw
-    out["screw_pitch_diameter_mm"] = 2.0 * (prof.pitch_radius if prof else 0.5 * design.screw.pitch_diameter_mm)
+    out.update(_screw_fields(design, screw, prof))
     return out, asm
 
 
@@ -258,7 +266,7 @@ def interference_checks(design: PRSDesign, screw_profile: ThreadProfile,
     nominal check queries only the pairs with the screw: every other pair is the same two
     meshes at the same placements in both assemblies (see :func:`check_assembly`).
 
-    A design longer than :data:`CHECK_WINDOW_TEETH` teeth is checked window by window
+    A design longer than :data:`~prs_geom.mesh.budget.CHECK_WINDOW_TEETH` teeth is checked window by window
     (:func:`check_windows`, :func:`windowed_interference_checks`).
     """
     if check_windows(design) is not None:
@@ -324,18 +332,13 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
         progress("interference windows", i + 1, len(windows))
     # every pair of the whole assembly: those never together in a window lie in different
     # slabs and cannot touch
-    names = scene_names(design, gear_parts is not None, mech_parts is not None)
-    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]
-             if Assembly.rigid_body(a) != Assembly.rigid_body(b)]
+    pairs = body_pairs(scene_names(design, gear_parts is not None, mech_parts is not None))
     out: dict[str, dict[str, Any]] = {}
     for screw, overlaps in totals.items():
         if not set(overlaps) <= set(pairs):   # pragma: no cover - the windows place only scene parts
             raise RuntimeError(f"windowed check met pairs outside the scene: {sorted(set(overlaps) - set(pairs))}")
-        section = _section(design, {pair: overlaps.get(pair) for pair in pairs}, tol, 0.0)
-        section["time_s"] = seconds[screw]
+        section = _section(design, {pair: overlaps.get(pair) for pair in pairs}, tol, seconds[screw])
         section["axial_windows"] = len(windows)
-        section["screw"] = screw
-        section["screw_pitch_diameter_mm"] = 2.0 * (screw_profile.pitch_radius if screw == "corrected"
-                                                    else 0.5 * design.screw.pitch_diameter_mm)
+        section.update(_screw_fields(design, screw, screw_profile if screw == "corrected" else None))
         out[screw] = section
     return out

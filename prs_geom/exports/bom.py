@@ -3,8 +3,8 @@ of report.html.
 
 One row per distinct part: item number (the balloon number of the assembly drawing), part,
 quantity, material and density (``materials.*`` of the design), the volume of one piece
-from its mesh (the rigid body's parts united with manifold3d: a roller with its gears and
-journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
+from its meshes (the rigid body's parts, their overlaps counted once: a roller with its
+gears and journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
 and the standard designation where there is one (the DIN 472 retaining ring). Masses are
 in kg, volumes in mm^3; the CSV keeps full float64 precision.
 """
@@ -61,11 +61,10 @@ def body_volumes(asm: Any) -> dict[str, float]:
     overlap); the result is exact while no three parts share a region, which the layout
     of docs/theory/mechanism.md guarantees. Bodies made of the same meshes (the rollers)
     are computed once."""
-    import manifold3d
+    from prs_geom.mesh.thread import to_manifold
 
     def solid(m: Any) -> Any:
-        return manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(m.vertices, dtype=np.float64),
-                                                     np.ascontiguousarray(m.faces, dtype=np.uint64)))
+        return to_manifold(m.vertices, m.faces)
 
     bodies: dict[str, list[Any]] = {}
     for name, (mesh, T, _) in asm.placed.items():

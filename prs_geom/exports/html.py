@@ -74,7 +74,7 @@ def _motions(asm: Any) -> tuple[dict[str, Any], dict[str, str]] | None:
     each roller from :func:`prs_geom.analysis.kinematics.poses`), row-major float32; and the
     body each scene part moves with. None for a design the kinematics does not accept."""
     from prs_geom.analysis.kinematics import check_kinematic_sizing, poses
-    from prs_geom.exports.scene import ANIMATION_PERIOD_S, ANIMATION_STEP_DEG
+    from prs_geom.exports.scene import ANIMATION_PERIOD_S, animation_angles, moving_group
     from prs_geom.geometry.frames import roller_transform
 
     d = asm.design
@@ -82,18 +82,13 @@ def _motions(asm: Any) -> tuple[dict[str, Any], dict[str, str]] | None:
         check_kinematic_sizing(d)
     except ValueError:
         return None
-    n = int(round(360.0 / ANIMATION_STEP_DEG))
-    angles = 2.0 * np.pi * np.arange(n + 1) / n
+    angles = animation_angles()
     P = poses(d, angles)
     motions = {"screw": P.screw, "nut": P.nut, "carrier": P.carrier}
     for k in range(d.roller.count):
         motions[f"roller_{k}"] = P.roller[k] @ np.linalg.inv(roller_transform(d, k))
-    body_of = {}
-    for name in asm.placed:
-        body = asm.rigid_body(name)
-        body_of[name] = ("nut" if body.startswith("retaining_ring") else
-                         "carrier" if body.startswith("carrier") else body)
-    anim = {"period_s": ANIMATION_PERIOD_S, "keys": n + 1,
+    body_of = {name: moving_group(asm.rigid_body(name)) for name in asm.placed}
+    anim = {"period_s": ANIMATION_PERIOD_S, "keys": len(angles),
             "motions": {k: _b64(np.asarray(v, dtype=np.float32).reshape(len(angles), 16)) for k, v in motions.items()}}
     return anim, body_of
 

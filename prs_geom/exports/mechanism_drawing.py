@@ -5,7 +5,8 @@ page of ``drawings.pdf`` after the thread parts (:func:`write_all_drawings`).
 Conventions as :mod:`prs_geom.exports.drawing` (DXF R2010, mm, ISO A3 landscape paper space,
 the same layers, text heights, title block and deterministic header), with a layer
 BALLOONS. Sizes come from :func:`prs_geom.geometry.mechanism.layout`, so what is dimensioned
-is what is meshed and checked:
+is what is meshed and checked (but for the nut ends' 0.1 mm relief on the outside radius,
+a meshing device, :data:`~prs_geom.geometry.mechanism.NUT_END_RELIEF_MM`):
 
 * **carrier** (front view and the axial section through roller 0's bore): outside, bore
   and pitch-circle diameters, the journal bore with its ISO 286 hole zone and limits, the
@@ -176,18 +177,15 @@ def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
     d1, d2 = ring.bore_mm, ring.groove_diameter_mm
     g_in = -end.groove[1]        # groove flank distances from datum A (X outward)
     g_out = -end.groove[0]
-    gear_root = R - 0.0
-    if lay.ring_gear_outer_radius_mm is not None:
-        from prs_geom.geometry.gears import design_gear_pair
-
-        pair = design_gear_pair(design)
-        gear_root = pair.ring.root_radius_mm
     s = _fit_scale(length + 80.0, R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
     k = 1.0 / s
     ov = _dim_override(s)
     r1 = 0.5 * d1
     pts = [(0.0, R), (length, R), (length, r1), (g_out, r1), (g_out, 0.5 * d2), (g_in, 0.5 * d2), (g_in, r1)]
-    if w > 0.0:
+    if w > 0.0:     # around the ring gear the nut's material starts at the gear's root circle
+        from prs_geom.geometry.gears import design_gear_pair
+
+        gear_root = design_gear_pair(design).ring.root_radius_mm
         pts += [(w, r1), (w, gear_root), (0.0, gear_root)]
     else:
         pts += [(0.0, r1)]

@@ -98,7 +98,7 @@ def rigid_body_pieces(asm: Assembly) -> Iterator[tuple[NDArray[np.float64], NDAr
     coincident vertices would otherwise make edges used by four faces (manifold3d may keep
     face-touching parts as separate shells, but their boundaries no longer coincide). Bodies whose parts share one frame
     (every roller) are united once and placed by transform."""
-    import manifold3d
+    from prs_geom.mesh.thread import from_manifold, to_manifold
 
     bodies: dict[str, list[tuple[object, NDArray[np.float64]]]] = {}
     for name, (mesh, T, _) in asm.placed.items():
@@ -114,15 +114,11 @@ def rigid_body_pieces(asm: Assembly) -> Iterator[tuple[NDArray[np.float64], NDAr
             else:
                 solid = None
                 for m, Tp in parts:
-                    piece = manifold3d.Manifold(manifold3d.Mesh64(
-                        np.ascontiguousarray(m.vertices, dtype=np.float64),
-                        np.ascontiguousarray(m.faces, dtype=np.uint64)))
+                    piece = to_manifold(m.vertices, m.faces)
                     if not same_frame:
                         piece = piece.transform(np.ascontiguousarray(Tp[:3, :4]))
                     solid = piece if solid is None else solid + piece
-                mg = solid.to_mesh64()
-                united[key] = (np.array(np.asarray(mg.vert_properties)[:, :3], dtype=np.float64),
-                               np.array(mg.tri_verts, dtype=np.int64))
+                united[key] = from_manifold(solid)
         V, F = united[key]
         if same_frame:
             V = V @ T[:3, :3].T + T[:3, 3]

@@ -246,11 +246,12 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
 
     nut_children, carrier_children, top = [], [], []
     for body, names in groups.items():
-        if body == "screw":
+        group = moving_group(body)
+        if group == "screw":
             top.extend(leaf(n, I) for n in names)
-        elif body == "nut" or body.startswith("retaining_ring"):
+        elif group == "nut":
             nut_children.extend(leaf(n, I) for n in names)
-        elif body.startswith("carrier"):
+        elif group == "carrier":
             carrier_children.extend(leaf(n, I) for n in names)
         else:   # a roller: its thread node carries the body's other parts as children
             mesh, T, _ = asm.placed[body]
@@ -262,6 +263,22 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
     return Scene(meshes, mats, nodes, title, (mechanism_animation(asm.design),))
 
 
+def moving_group(body: str) -> str:
+    """What a rigid body (:meth:`~prs_geom.mesh.assembly.Assembly.rigid_body`) moves with in
+    the running mechanism: "screw", "nut" (the nut and the retaining rings in its grooves),
+    "carrier" (both carriers) or, for a roller, the roller itself."""
+    if body == "nut" or body.startswith("retaining_ring"):
+        return "nut"
+    return "carrier" if body.startswith("carrier") else body
+
+
+def animation_angles(step_deg: float = ANIMATION_STEP_DEG) -> NDArray[np.float64]:
+    """Screw angles (rad) of the animation keys: one revolution, a key every ``step_deg``,
+    both ends included."""
+    n = int(round(360.0 / step_deg))
+    return 2.0 * math.pi * np.arange(n + 1) / n
+
+
 def mechanism_animation(design: Any, period_s: float = ANIMATION_PERIOD_S,
                         step_deg: float = ANIMATION_STEP_DEG) -> SceneAnimation:
     """One screw revolution of the running mechanism as node keyframes, from the poses of
@@ -270,8 +287,7 @@ def mechanism_animation(design: Any, period_s: float = ANIMATION_PERIOD_S,
     :func:`assembly_scene`."""
     from prs_geom.analysis.kinematics import poses
 
-    n = int(round(360.0 / step_deg))
-    angles = 2.0 * math.pi * np.arange(n + 1) / n
+    angles = animation_angles(step_deg)
     P = poses(design, angles)
     ch: dict[str, dict[str, NDArray[np.float64]]] = {
         "screw": {"rotation": _continuous(quaternions(P.screw[:, :3, :3]))},

@@ -1046,15 +1046,16 @@ def write_solids(solids: Sequence[StepSolid], path: str | os.PathLike) -> dict[s
 MECHANISM_STEP_PARTS = ("carrier", "retaining_ring")
 
 
-def mechanism_step_solid(design: "PRSDesign", part: str) -> StepSolid:
+def mechanism_step_solid(design: "PRSDesign", part: str, mesh: Any = None) -> StepSolid:
     """The carrier or the retaining ring (:mod:`prs_geom.geometry.mechanism`) as an exact
     B-rep: circular cylinders and planes (OpenCascade primitives and booleans), in its own
     frame (z = 0 at its face toward the nut end, as ``<part>.stl``), at the modelled sizes
     (fitted features at the middle of their ISO 286 zone).
 
-    ``mesh_volume_mm3`` is the volume of the part's mesh (polygons at <= 1 um) and
-    ``analytic_volume_mm3`` the closed form; the B-rep's volume must agree with the closed
-    form within ``VOLUME_REL_LIMIT``.
+    ``mesh_volume_mm3`` is the volume of the part's mesh (polygons at <= 1 um): ``mesh``
+    (anything with a ``volume``, e.g. the build's placed ``<part>_lo``), meshed here when
+    not given; ``analytic_volume_mm3`` is the closed form, which the B-rep's volume must
+    agree with within ``VOLUME_REL_LIMIT``.
     """
     import time
 
@@ -1101,7 +1102,8 @@ def mechanism_step_solid(design: "PRSDesign", part: str) -> StepSolid:
                          x_dir=(math.cos(half), math.sin(half), 0.0))
         shape = cut(outer, cylinder(lay.ring_inner_radius_mm, h + 2.0, z=-1.0))
         exact = lay.ring_volume_mm3
-    mesh = mechanism_meshes(design, lay, MECHANISM_CHORD_MM)[f"{part}_lo"]
+    if mesh is None:
+        mesh = mechanism_meshes(design, lay, MECHANISM_CHORD_MM)[f"{part}_lo"]
     mesh_volume = float(mesh.volume)
     volume = shape_volume(shape)
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SOLID

@@ -1398,3 +1398,10 @@ def design_gear_pair(design) -> GearPair | None:
         field = "gears.module_mm" if g.module_mm is not None else "roller.pitch_diameter_mm"
         raise DesignError(field, g.module_mm if g.module_mm is not None else design.roller.pitch_diameter_mm,
                           f"no valid roller/ring gear pair: {exc.rule}") from exc
+
+
+def ring_gear_outer_radius(design, pair: GearPair) -> float:
+    """Outside radius (mm) of the modelled ring gear body: halfway from the ring's root
+    circle to the nut body (an outer cylinder flush with the nut's would meet its
+    differently sampled polygon in slivers when the nut's parts are united)."""
+    return 0.5 * (pair.ring.root_radius_mm + 0.5 * design.nut.outer_diameter_mm)

@@ -90,10 +90,8 @@ class FitCheck:
     def report(self) -> dict:
         return {"feature": self.feature, "fit": self.fit,
                 "nominal_diameter_mm": self.nominal_diameter_mm,
-                "hole_limits_mm": [self.nominal_diameter_mm + self.limits.hole.lower_mm,
-                                   self.nominal_diameter_mm + self.limits.hole.upper_mm],
-                "shaft_limits_mm": [self.nominal_diameter_mm + self.limits.shaft.lower_mm,
-                                    self.nominal_diameter_mm + self.limits.shaft.upper_mm],
+                "hole_limits_mm": [self.limits.hole.min_size_mm, self.limits.hole.max_size_mm],
+                "shaft_limits_mm": [self.limits.shaft.min_size_mm, self.limits.shaft.max_size_mm],
                 "min_clearance_mm": self.min_clearance_mm, "max_clearance_mm": self.max_clearance_mm,
                 "modelled_clearance_mm": self.modelled_clearance_mm, "passed": self.passed}
 
@@ -188,14 +186,20 @@ class MechanismLayout:
     roller_count: int
     ring: RetainingRing
     ring_inner_radius_mm: float
-    ring_outer_radius_mm: float
     nut_bore_radius_mm: float
-    groove_radius_mm: float
     nut_outer_radius_mm: float
-    nut_root_radius_mm: float
-    thread_pitch_mm: float
     ends: tuple[EndLayout, EndLayout]
     stack: StackUp
+
+    @property
+    def groove_radius_mm(self) -> float:
+        """Radius of the ring groove's bottom, d2 / 2."""
+        return 0.5 * self.ring.groove_diameter_mm
+
+    @property
+    def ring_outer_radius_mm(self) -> float:
+        """The ring's outside as fitted: seated on the groove bottom."""
+        return self.groove_radius_mm
 
     # closed-form volumes of the true shapes (mm^3) ---------------------------------
     @property
@@ -256,13 +260,13 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
     m = design.mechanism
     if not m.enabled:
         return None
-    from prs_geom.geometry.gears import design_gear_pair
+    from prs_geom.geometry.gears import design_gear_pair, ring_gear_outer_radius
 
     pair = design_gear_pair(design)
     L = design.thread.engaged_teeth * design.thread.pitch_mm
     w = pair.pinion.face_width_mm if pair is not None else 0.0
     R_o = 0.5 * design.nut.outer_diameter_mm
-    ring_gear_outer = 0.5 * (pair.ring.root_radius_mm + R_o) if pair is not None else None
+    ring_gear_outer = ring_gear_outer_radius(design, pair) if pair is not None else None
     a = design.centre_distance_mm
     z = design.roller.count
 
@@ -354,7 +358,5 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         gear_face_width_mm=w, ring_gear_outer_radius_mm=ring_gear_outer, journal_diameter_mm=d_j,
         journal_fit=journal, carrier_inner_radius_mm=r_in, carrier_outer_radius_mm=r_out,
         carrier_thickness_mm=t_c, carrier_fit=carrier_fit, centre_distance_mm=a, roller_count=z,
-        ring=ring, ring_inner_radius_mm=ring_inner, ring_outer_radius_mm=0.5 * ring.groove_diameter_mm,
-        nut_bore_radius_mm=bore_radius, groove_radius_mm=0.5 * ring.groove_diameter_mm,
-        nut_outer_radius_mm=R_o, nut_root_radius_mm=0.5 * design.nut.major_diameter_mm,
-        thread_pitch_mm=design.thread.pitch_mm, ends=ends, stack=stack)
+        ring=ring, ring_inner_radius_mm=ring_inner, nut_bore_radius_mm=bore_radius,
+        nut_outer_radius_mm=R_o, ends=ends, stack=stack)

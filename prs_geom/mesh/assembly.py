@@ -20,7 +20,8 @@ from prs_geom.geometry.frames import (FIRST_MID_PITCHES, carrier_angles, part_wa
                                      roller_transform, screw_z_range, thread_length)
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.datum import datum_mark
-from prs_geom.mesh.thread import ThreadMesh, cut_datum_mark, part_chord_tolerance, thread_mesh
+from prs_geom.mesh.thread import (ThreadMesh, cut_datum_mark, from_manifold, part_chord_tolerance, thread_mesh,
+                                  to_manifold)
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
 
@@ -89,9 +90,7 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
     every roller. The ring gears span the same z ranges in the nut frame, tooth 0 on +x, rings
     from their root to halfway to the nut body diameter.
     """
-    import manifold3d
-
-    from prs_geom.geometry.gears import design_gear_pair, roller_gear_phasing
+    from prs_geom.geometry.gears import design_gear_pair, ring_gear_outer_radius, roller_gear_phasing
     from prs_geom.mesh.gears import gear_mesh
 
     pair = design_gear_pair(design)
@@ -111,18 +110,13 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
     out: dict[str, trimesh.Trimesh] = {}
     # the prism overshoots the thread's end planes, so only they bound the gear axially
     Vg, Fg = gear_mesh(pair.pinion, -w - 1.0, L + w + 1.0, gear_tol, phase_rad=offset)
-    prism = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(Vg), np.ascontiguousarray(Fg, dtype=np.uint64)))
+    prism = to_manifold(Vg, Fg)
     for name, (z0, z1) in (("roller_lo", (-w, 0.0)), ("roller_hi", (L, L + w))):
         tm = thread_mesh(prof.roller, z0, z1, part_chord_tolerance(prof.roller, tol),
                          FIRST_MID_PITCHES["roller"] * p, warp)
-        thread = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(tm.vertices),
-                                                       np.ascontiguousarray(tm.faces, dtype=np.uint64)))
-        m = (thread ^ prism).to_mesh64()
-        out[name] = trimesh.Trimesh(np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
-                                    np.array(m.tri_verts, dtype=np.int64), process=False, validate=False)
-    # the ring gear is a ring halfway from its root to the nut body: an outer cylinder flush
-    # with the nut's would meet its differently sampled polygon in slivers when united
-    ring_outer = 0.5 * (pair.ring.root_radius_mm + 0.5 * design.nut.outer_diameter_mm)
+        out[name] = trimesh.Trimesh(*from_manifold(to_manifold(tm.vertices, tm.faces) ^ prism),
+                                    process=False, validate=False)
+    ring_outer = ring_gear_outer_radius(design, pair)
     for name, (z0, z1) in (("ring_lo", (-w, 0.0)), ("ring_hi", (L, L + w))):
         V, F = gear_mesh(pair.ring, z0, z1, gear_tol, outer_radius_mm=ring_outer)
         out[name] = trimesh.Trimesh(V, F, process=False, validate=False)
@@ -201,14 +195,8 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
     """
     tol = tol or design.mesh.chord_tolerance_mm
     if reuse is not None:
-        if reuse.design != design or reuse.tolerance != tol:
-            raise ValueError("reuse needs an assembly of the same design and tolerance")
-        parts = dict(reuse.parts)
-        parts["screw"] = build_part(design, "screw", tol, None, screw_profile)
+        asm = _with_new_screw(reuse, design, tol, screw_profile)
         progress("meshes", 1, 1)
-        asm = Assembly(design, parts, tolerance=tol)
-        for name, (mesh, T, kind) in reuse.placed.items():
-            asm.placed[name] = (parts["screw"].to_trimesh(), T, kind) if name == "screw" else (mesh, T, kind)
         return asm
     prof = ThreadProfiles.from_design(design)
     parts = {}
@@ -221,17 +209,36 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
     return asm
 
 
-def scene_names(design: PRSDesign, gears: bool, mechanism: bool = False) -> list[str]:
-    """Scene part names in the order :func:`build_assembly` places them: screw, nut, the
-    ring gears (low, high), the nut ends, then each roller followed by its low and high
-    gear and journal, then the carriers and the retaining rings."""
-    names = ["screw", "nut"] + (["nut_ring_gear_lo", "nut_ring_gear_hi"] if gears else [])
-    names += ["nut_end_lo", "nut_end_hi"] if mechanism else []
+#: The two ends of a part pair (low z, high z).
+SIDES = ("lo", "hi")
+
+
+def _scene_entries(design: PRSDesign, gears: bool, mechanism: bool) -> list[tuple[str, str, str, int | None, str]]:
+    """The scene parts in placement order, each (scene name, mesh table, key in the table,
+    roller index whose transform places it or None for the screw frame, kind): screw, nut,
+    the ring gears, the nut ends, then each roller followed by its gears and journals, then
+    the carriers and the retaining rings. Tables: "parts" (the thread meshes), "gears"
+    (:func:`end_gears`), "mechanism" (:func:`mechanism_parts`)."""
+    e = [("screw", "parts", "screw", None, "thread"), ("nut", "parts", "nut", None, "thread")]
+    if gears:
+        e += [(f"nut_ring_gear_{s}", "gears", f"ring_{s}", None, "gear") for s in SIDES]
+    if mechanism:
+        e += [(f"nut_end_{s}", "mechanism", f"nut_end_{s}", None, "mechanism") for s in SIDES]
     for k in range(design.roller.count):
-        names += [f"roller_{k}"] + ([f"roller_{k}_gear_lo", f"roller_{k}_gear_hi"] if gears else [])
-        names += [f"roller_{k}_journal_lo", f"roller_{k}_journal_hi"] if mechanism else []
-    names += ["carrier_lo", "carrier_hi", "retaining_ring_lo", "retaining_ring_hi"] if mechanism else []
-    return names
+        e.append((f"roller_{k}", "parts", "roller", k, "thread"))
+        if gears:
+            e += [(f"roller_{k}_gear_{s}", "gears", f"roller_{s}", k, "gear") for s in SIDES]
+        if mechanism:
+            e += [(f"roller_{k}_journal_{s}", "mechanism", f"journal_{s}", k, "mechanism") for s in SIDES]
+    if mechanism:
+        e += [(f"{part}_{s}", "mechanism", f"{part}_{s}", None, "mechanism")
+              for part in ("carrier", "retaining_ring") for s in SIDES]
+    return e
+
+
+def scene_names(design: PRSDesign, gears: bool, mechanism: bool = False) -> list[str]:
+    """Scene part names in the order :func:`build_assembly` places them (:func:`_scene_entries`)."""
+    return [entry[0] for entry in _scene_entries(design, gears, mechanism)]
 
 
 def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh] | None:
@@ -250,45 +257,41 @@ def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh]
 def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progress: ProgressFn = silent,
            gear_window: tuple[float, float] | None = None,
            mech_parts: dict[str, trimesh.Trimesh] | None = None) -> None:
-    """Place ``asm.parts``, the gears and the mechanism parts (all, or those whose z range,
-    the same in the part frames and the screw frame, meets ``gear_window``) in
-    ``asm.placed``, in the order of :func:`scene_names`."""
+    """Place ``asm.parts``, the gears and the mechanism parts in ``asm.placed``, in the order
+    of :func:`scene_names`; with ``gear_window``, only the gears and mechanism parts whose z
+    range (the same in the part frames and the screw frame) meets it."""
     design = asm.design
-    parts = asm.parts
+    tables = {"parts": {name: tm.to_trimesh() for name, tm in asm.parts.items()},
+              "gears": gear_parts or {}, "mechanism": mech_parts or {}}
+    transforms = {k: roller_transform(design, k) for k in range(design.roller.count)}
     I = np.eye(4)
-
-    def wanted(table: dict[str, trimesh.Trimesh] | None, key: str) -> bool:
-        if table is None or key not in table:
-            return False
-        if gear_window is None:
-            return True
-        z = np.asarray(table[key].vertices)[:, 2]
-        return bool(z.max() > gear_window[0] and z.min() < gear_window[1])
-
-    def put(table: dict[str, trimesh.Trimesh] | None, key: str, name: str, T: NDArray[np.float64],
-            kind: str) -> None:
-        """Place ``table[key]`` as ``name`` at ``T`` (low end, then high end) when wanted."""
-        for side in ("lo", "hi"):
-            if wanted(table, key.format(side=side)):
-                asm.placed[name.format(side=side)] = (table[key.format(side=side)], T, kind)
-
-    if "screw" in parts:
-        asm.placed["screw"] = (parts["screw"].to_trimesh(), I, "thread")
-    if "nut" in parts:
-        asm.placed["nut"] = (parts["nut"].to_trimesh(), I, "thread")
-    put(gear_parts, "ring_{side}", "nut_ring_gear_{side}", I, "gear")
-    put(mech_parts, "nut_end_{side}", "nut_end_{side}", I, "mechanism")
-    roller_tm = parts["roller"].to_trimesh() if "roller" in parts else None
     z = design.roller.count
-    for k in range(z):
-        T = roller_transform(design, k)
-        if roller_tm is not None:
-            asm.placed[f"roller_{k}"] = (roller_tm, T, "thread")
-        put(gear_parts, "roller_{side}", f"roller_{k}_gear_{{side}}", T, "gear")
-        put(mech_parts, "journal_{side}", f"roller_{k}_journal_{{side}}", T, "mechanism")
-        progress("placing rollers", k + 1, z)
-    put(mech_parts, "carrier_{side}", "carrier_{side}", I, "mechanism")
-    put(mech_parts, "retaining_ring_{side}", "retaining_ring_{side}", I, "mechanism")
+    for name, table, key, k, kind in _scene_entries(design, gear_parts is not None, mech_parts is not None):
+        mesh = tables[table].get(key)
+        if mesh is None:
+            continue
+        if table != "parts" and gear_window is not None:
+            zs = np.asarray(mesh.vertices)[:, 2]
+            if not (zs.max() > gear_window[0] and zs.min() < gear_window[1]):
+                continue
+        asm.placed[name] = (mesh, I if k is None else transforms[k], kind)
+        if table == "parts" and key == "roller":
+            progress("placing rollers", k + 1, z)
+
+
+def _with_new_screw(reuse: Assembly, design: PRSDesign, tol: float, screw_profile: ThreadProfile | None,
+                    z_window: tuple[float, float] | None = None) -> Assembly:
+    """``reuse`` (an assembly of the same design and tolerance) with its screw meshed again
+    (``screw_profile``, over ``z_window``; left out where the window misses the screw) and
+    every other part and placement kept as they are."""
+    if reuse.design != design or reuse.tolerance != tol:
+        raise ValueError("reuse needs an assembly of the same design and tolerance")
+    screw = build_part(design, "screw", tol, None, screw_profile, z_window)
+    others = {k: v for k, v in reuse.parts.items() if k != "screw"}
+    asm = Assembly(design, others if screw is None else {"screw": screw, **others}, tolerance=tol)
+    placed = {} if screw is None else {"screw": (screw.to_trimesh(), np.eye(4), "thread")}
+    asm.placed = {**placed, **{n: v for n, v in reuse.placed.items() if n != "screw"}}
+    return asm
 
 
 def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float],
@@ -298,7 +301,8 @@ def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float]
                     mech_parts: dict[str, trimesh.Trimesh] | None = None) -> Assembly:
     """The assembly's piece between the planes z = ``z_window`` (screw frame, mm): every
     thread part meshed over that window only (:func:`build_part`), and the gears of
-    ``gear_parts`` (:func:`end_gears`, meshed once for all windows) that reach into it.
+    ``gear_parts`` (:func:`end_gears`) and mechanism parts of ``mech_parts``
+    (:func:`mechanism_parts`), both meshed once for all windows, that reach into it.
 
     The rollers' frames differ from the screw frame by a rotation about and a shift
     perpendicular to the axis, so one window in z is the same window in every part frame.
@@ -306,20 +310,7 @@ def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float]
     nut and gears are kept (only the screw is meshed again, as in :func:`build_assembly`).
     """
     if reuse is not None:
-        if reuse.design != design or reuse.tolerance != tol:
-            raise ValueError("reuse needs an assembly of the same design and tolerance")
-        parts = {k: v for k, v in reuse.parts.items() if k != "screw"}
-        screw = build_part(design, "screw", tol, None, screw_profile, z_window)
-        if screw is not None:
-            parts["screw"] = screw
-        asm = Assembly(design, parts, tolerance=tol)
-        screw_tm = screw.to_trimesh() if screw is not None else None
-        for name, (mesh, T, kind) in reuse.placed.items():
-            if name != "screw":
-                asm.placed[name] = (mesh, T, kind)
-        if screw_tm is not None:
-            asm.placed = {"screw": (screw_tm, np.eye(4), "thread"), **asm.placed}
-        return asm
+        return _with_new_screw(reuse, design, tol, screw_profile, z_window)
     prof = ThreadProfiles.from_design(design)
     parts = {}
     for name in ("screw", "roller", "nut"):

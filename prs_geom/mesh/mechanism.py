@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from prs_geom.geometry.frames import carrier_angles
 from prs_geom.geometry.mechanism import RING_GAP_RAD, MechanismLayout
+from prs_geom.mesh.thread import from_manifold
 from prs_geom.model.design import PRSDesign
 
 #: The mechanism parts are never meshed coarser than this (mm).
@@ -32,14 +33,21 @@ def segments(radius: float, tol: float) -> int:
     return 4 * math.ceil(n / 4)
 
 
-def _circle(radius: float, tol: float, centre: tuple[float, float] = (0.0, 0.0), hole: bool = False,
-            start: float = 0.0, stop: float = 2.0 * math.pi) -> NDArray[np.float64]:
+def _circle(radius: float, tol: float, centre: tuple[float, float] = (0.0, 0.0), hole: bool = False) -> NDArray[np.float64]:
     """Polygon of a circle (counter-clockwise): vertices on it, or for a ``hole`` edges
     tangent to it (vertices at radius / cos(pi / n))."""
     n = segments(radius, tol)
     r = radius / math.cos(math.pi / n) if hole else radius
-    t = start + (stop - start) * np.arange(n) / n
+    t = 2.0 * math.pi * np.arange(n) / n
     return np.column_stack([centre[0] + r * np.cos(t), centre[1] + r * np.sin(t)])
+
+
+def _arc(radius: float, tol: float, start: float, stop: float) -> NDArray[np.float64]:
+    """Vertices on a circular arc from angle ``start`` to ``stop`` (rad, both included),
+    counter-clockwise, in as many steps as the full circle's polygon has sides."""
+    n = segments(radius, tol)
+    t = np.append(start + (stop - start) * np.arange(n) / n, stop)
+    return np.column_stack([radius * np.cos(t), radius * np.sin(t)])
 
 
 def _extruded(outer: NDArray, holes: list[NDArray], z0: float, z1: float):
@@ -53,9 +61,7 @@ def _extruded(outer: NDArray, holes: list[NDArray], z0: float, z1: float):
 
 
 def _trimesh(solid) -> "trimesh.Trimesh":
-    m = solid.to_mesh64()
-    return trimesh.Trimesh(np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
-                           np.array(m.tri_verts, dtype=np.int64), process=False, validate=False)
+    return trimesh.Trimesh(*from_manifold(solid), process=False, validate=False)
 
 
 def _prism(outer: NDArray, holes: list[NDArray], z0: float, z1: float) -> "trimesh.Trimesh":
@@ -70,21 +76,18 @@ def mechanism_meshes(design: PRSDesign, lay: MechanismLayout, tol: float) -> dic
     r_j = 0.5 * lay.journal_fit.shaft_diameter_mm
     r_b = 0.5 * lay.journal_fit.hole_diameter_mm
     a = lay.centre_distance_mm
+    journal = _circle(r_j, tol)
+    carrier = (_circle(lay.carrier_outer_radius_mm, tol),
+               [_circle(lay.carrier_inner_radius_mm, tol, hole=True),
+                *(_circle(r_b, tol, (a * math.cos(psi), a * math.sin(psi)), hole=True) for psi in carrier_angles(design))])
+    # the C-shaped ring, its opening centred on +x: outer arc out, inner arc back
+    half = 0.5 * RING_GAP_RAD
+    ring = np.vstack([_arc(lay.ring_outer_radius_mm, tol, half, 2.0 * math.pi - half),
+                      _arc(lay.ring_inner_radius_mm, tol, half, 2.0 * math.pi - half)[::-1]])
     for side, end in zip(("lo", "hi"), lay.ends):
-        out[f"journal_{side}"] = _prism(_circle(r_j, tol), [], *end.journal)
-        bores = [_circle(r_b, tol, (a * math.cos(psi), a * math.sin(psi)), hole=True)
-                 for psi in carrier_angles(design)]
-        out[f"carrier_{side}"] = _prism(_circle(lay.carrier_outer_radius_mm, tol),
-                                        [_circle(lay.carrier_inner_radius_mm, tol, hole=True), *bores], *end.carrier)
-        # the C-shaped ring: its opening centred on +x
-        half = 0.5 * RING_GAP_RAD
-        arc_o = _circle(lay.ring_outer_radius_mm, tol, start=half, stop=2.0 * math.pi - half)
-        arc_i = _circle(lay.ring_inner_radius_mm, tol, start=half, stop=2.0 * math.pi - half)
-        t_end = 2.0 * math.pi - half
-        c_pts = np.vstack([arc_o, [[lay.ring_outer_radius_mm * math.cos(t_end), lay.ring_outer_radius_mm * math.sin(t_end)],
-                                   [lay.ring_inner_radius_mm * math.cos(t_end), lay.ring_inner_radius_mm * math.sin(t_end)]],
-                           arc_i[::-1]])
-        out[f"retaining_ring_{side}"] = _prism(c_pts, [], *end.ring)
+        out[f"journal_{side}"] = _prism(journal, [], *end.journal)
+        out[f"carrier_{side}"] = _prism(*carrier, *end.carrier)
+        out[f"retaining_ring_{side}"] = _prism(ring, [], *end.ring)
         out[f"nut_end_{side}"] = _nut_end(lay, end, tol)
     return out
 

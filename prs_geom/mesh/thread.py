@@ -761,13 +761,24 @@ def analytic_thread_volume(profile: ThreadProfile, length: float, body_radius: f
     return inner
 
 
-def manifold_status(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> str:
-    """manifold3d's verdict on a mesh ("NoError" when it accepts it as a solid), in float64."""
+def to_manifold(vertices: NDArray[np.float64], faces: NDArray[np.int64]):
+    """The manifold3d solid of a triangle mesh (float64 vertices, as given)."""
     import manifold3d
 
-    m = manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(vertices, dtype=np.float64),
-                                              np.ascontiguousarray(faces, dtype=np.uint64)))
-    return str(m.status()).split(".")[-1]
+    return manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(vertices, dtype=np.float64),
+                                                 np.ascontiguousarray(faces, dtype=np.uint64)))
+
+
+def from_manifold(solid) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Vertices (float64, a writable copy) and faces of a manifold3d solid."""
+    m = solid.to_mesh64()
+    return (np.array(np.asarray(m.vert_properties)[:, :3], dtype=np.float64),
+            np.array(m.tri_verts, dtype=np.int64))
+
+
+def manifold_status(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> str:
+    """manifold3d's verdict on a mesh ("NoError" when it accepts it as a solid), in float64."""
+    return str(to_manifold(vertices, faces).status()).split(".")[-1]
 
 
 def float32_rounding(vertices: NDArray[np.float64]) -> float:
