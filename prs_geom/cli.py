@@ -116,6 +116,10 @@ def cmd_build(args: argparse.Namespace) -> int:
 
     design = _load_any(args.design)
     _warn(design)
+    if args.compliance is not None and not isinstance(design, PRSDesign):
+        raise UsageError("--compliance applies to planetary roller screw designs, not to a harmonic drive")
+    if isinstance(design, PRSDesign):
+        design = _with_compliance(design, args)
     out = Path(args.out) if args.out else Path("exports") / design.name
     check_output_dir(out)   # refuse before any work
     progress = silent if args.quiet else StderrProgress()
@@ -207,7 +211,12 @@ def cmd_loads(args: argparse.Namespace) -> int:
             design = design.with_changes(loading=replace(design.loading, axial_load_n=args.load))
         except DesignError as exc:
             raise exc.renamed("--load") from None
-    rep = loads_report(design, progress=silent if args.json else StderrProgress())
+    design = _with_compliance(design, args)
+    progress = silent if args.json else StderrProgress()
+    from prs_geom.pipeline import load_models
+
+    models = load_models(design, progress=progress)
+    rep = loads_report(design, model=models.model, progress=progress)
     if args.json:
         _print_json(rep)
         return EXIT_OK
@@ -226,7 +235,41 @@ def cmd_loads(args: argparse.Namespace) -> int:
     sens = rep["sensitivity"]
     print(f"a {sens['pitch_error_um']:g} um error on one pitch changes a coefficient by up to "
           f"{max(sens['max_ldc_change_roller'], sens['max_ldc_change_nut']):.4f}")
+    if models.compare:
+        from prs_geom.analysis.loads import model_risk
+
+        _print_model_risk(model_risk(design, models.compare), models)
     return EXIT_OK
+
+
+def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
+    """The design with ``--compliance`` applied; the FE extra checked before any work."""
+    if getattr(args, "compliance", None) is not None:
+        from dataclasses import replace
+
+        design = design.with_changes(loads=replace(design.loads, compliance=args.compliance))
+    if design.loads.compliance == "fe":
+        from prs_geom.fe_cache import require_fe
+
+        require_fe()
+    return design
+
+
+def _print_model_risk(risk, models) -> None:
+    """The model-risk table of ``loads --compliance fe`` (worst and least coefficient per side
+    at the design load)."""
+    cache = models.cache
+    src = "read from the cache" if all(cache.hits.values()) else "computed and stored in the cache"
+    print(f"finite-element influence matrices {src} {cache.folder} ({cache.seconds:.1f} s)")
+    print("model risk at the design load (each set of pitch lists under each compliance model):")
+    print(f"  {'pitch lists':<36} {'model':<9} {'nut-roller min-max':>20} {'roller-screw min-max':>22}")
+    for c in risk.cases:
+        if c.load_fraction != 1.0:
+            continue
+        lists = c.pitch_lists + (f" ({c.designed_with})" if c.designed_with else "")
+        print(f"  {lists:<36} {c.evaluated_with:<9} {c.ldc_nut_roller.min():9.4f}-{c.ldc_nut_roller.max():.4f}"
+              f" {c.ldc_roller_screw.min():11.4f}-{c.ldc_roller_screw.max():.4f}")
+    print(f"largest difference of a coefficient between the models: {risk.largest_model_difference:.4f}")
 
 
 def cmd_rating(args: argparse.Namespace) -> int:
@@ -322,7 +365,7 @@ def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
 
 
 def cmd_design_pitch(args: argparse.Namespace) -> int:
-    from prs_geom.analysis.loads import build_model, design_pitches, forward, with_pitch_lists
+    from prs_geom.analysis.loads import design_pitches, forward, with_pitch_lists
 
     design = _load(args.design)
     _warn(design)
@@ -336,15 +379,22 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
     t_nr = t_rs = None
     if args.target != "equal":
         t_nr, t_rs = _read_target(args.target, n)
-    model = build_model(design)
+    if args.out:
+        check_output_file(args.out, args.force)            # refuse before the work
+    design = _with_compliance(design, args)
+    from prs_geom.pipeline import load_models
+
+    model = load_models(design, progress=StderrProgress()).model
     pd = design_pitches(design, t_nr, t_rs, model=model)
     new = with_pitch_lists(design, pd, name=args.name or f"{design.name}-graded")
     check = forward(new, model=model)
     err = max(abs(check.ldc_nr - pd.target_nr).max(), abs(check.ldc_rs - pd.target_rs).max())
+    how = ("the finite-element tooth compliance (loads.compliance = \"fe\")" if design.loads.compliance == "fe"
+           else f"the analytic tooth compliance (Yamamoto, width '{design.loads.tooth_width}')")
     text = dumps_toml(new, header=(
         f"Graded pitch lists of '{design.name}' for target '{args.target}' at "
-        f"{design.loading.axial_load_n:g} N ({design.loading.installation}), written by prs-geom "
-        f"design-pitch.\nForward check: largest coefficient error {err:.2e}."))
+        f"{design.loading.axial_load_n:g} N ({design.loading.installation}), designed with {how}, "
+        f"written by prs-geom design-pitch.\nForward check: largest coefficient error {err:.2e}."))
     if args.out:
         _write_out_file(args.out, text, args.force)
         print(f"wrote {args.out}: largest coefficient error of the forward check {err:.2e}", file=sys.stderr)
@@ -503,6 +553,9 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
 
     if args.target != "equal":
         raise UsageError("--robust chooses its own load sharing: leave out --target")
+    if args.compliance == "fe":
+        raise UsageError("--robust designs with the analytic compliance (its Monte Carlo study would need the "
+                         "finite-element solve per sample): leave out --compliance fe")
     if args.out:
         check_output_file(args.out, args.force)            # refuse before the work
     spectrum = load_spectrum(args.spectrum) if args.spectrum else Spectrum.single(design.loading.axial_load_n)
@@ -624,6 +677,12 @@ def make_parser() -> argparse.ArgumentParser:
                        "or 'local' (needs pip install \"prs-geom[dask]\")")
         g.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
 
+    def compliance_arg(q: argparse.ArgumentParser) -> None:
+        q.add_argument("--compliance", choices=("analytic", "fe"),
+                       help="tooth compliance of the load model (default: the design's loads.compliance): "
+                            "'analytic' (Yamamoto) or 'fe' (finite-element influence matrices, computed once "
+                            "and cached; needs pip install \"prs-geom[fe]\"; docs/theory/fe.md)")
+
     def error_args(q: argparse.ArgumentParser) -> None:
         g = q.add_argument_group("error model (default: the design's [tolerances] section, else no error)")
         g.add_argument("--flank-um", type=float, metavar="T", help="every loaded flank's axial position, +-T um")
@@ -654,6 +713,7 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--step", action="store_true",
                    help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
                         "pip install \"prs-geom[step]\"; several seconds)")
+    compliance_arg(p)
     budget_arg(p)
     p.set_defaults(func=cmd_build)
 
@@ -678,11 +738,13 @@ def make_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("loads", help="load distribution over the thread teeth",
-                       description="Tooth loads (nonlinear Hertz + Yamamoto teeth + bodies) of the "
-                                   "design's pitch lists, coefficients, stiffness, off-design loads.")
+                       description="Tooth loads (nonlinear Hertz + Yamamoto or finite-element teeth + "
+                                   "bodies) of the design's pitch lists, coefficients, stiffness, off-design "
+                                   "loads; with --compliance fe also the model risk.")
     design_arg(p)
     p.add_argument("--load", type=float, metavar="N", help="axial load in N instead of the design load")
     p.add_argument("--json", action="store_true", help="print the report.json 'loads' section")
+    compliance_arg(p)
     p.set_defaults(func=cmd_loads)
 
     p = sub.add_parser("rating", help="load ratings, life, limits, efficiency and stiffness",
@@ -723,6 +785,7 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--quantile", type=float, metavar="Q", help="with --robust: the quantile minimised (0.95)")
     p.add_argument("--json", action="store_true", help="with --robust: print the comparison as JSON "
                                                        "(the design goes to --out)")
+    compliance_arg(p)
     error_args(p)
     scale_args(p)
     p.set_defaults(func=cmd_design_pitch)

@@ -25,7 +25,8 @@ import numpy as np
 
 from prs_geom._version import __version__
 from prs_geom.analysis.contact import ContactResult, analyse_contact
-from prs_geom.analysis.loads import LoadsResult, analyse_loads
+from prs_geom.analysis.load_solver import LoadModel
+from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
 from prs_geom.geometry.frames import carrier_angles, roller_spin
@@ -44,6 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
     from prs_geom.background import Background, Job
+    from prs_geom.fe_cache import CachedInfluence
 
 REPORT_NAME = "report.json"
 #: Version of the report.json layout (``format_version``); the JSON Schema
@@ -70,16 +72,56 @@ class Analysis:
     loads: LoadsResult
 
 
+@dataclass(frozen=True)
+class LoadModels:
+    """The load model a design asks for (``loads.compliance``) and what it was made from.
+
+    ``model`` is the one the analysis uses; with ``"fe"``, ``compare`` holds both models by
+    name (``"analytic"``, ``"fe"``) for the model-risk study and ``cache`` says where the
+    influence matrices came from (:mod:`prs_geom.fe_cache`)."""
+
+    model: LoadModel
+    compare: dict[str, LoadModel] | None = None
+    cache: "CachedInfluence | None" = None
+
+
+def load_models(design: PRSDesign, contact: ContactResult | None = None,
+                progress: ProgressFn = silent) -> LoadModels:
+    """The analytic load model, or with ``loads.compliance = "fe"`` the FE one, its influence
+    matrices read from the cache or computed and stored there (progress
+    ``"fe matrices"``). Raises :class:`~prs_geom.model.errors.EnvironmentFailure` with the
+    install command when the FE extra is missing."""
+    contact = analyse_contact(design) if contact is None else contact
+    analytic = build_model(design, contact)
+    if design.loads.compliance != "fe":
+        return LoadModels(analytic)
+    from prs_geom.analysis.fe.compliance import fe_load_model
+    from prs_geom.fe_cache import cached_influence
+
+    # the teeth's compliance is that of the constant-pitch thread: a graded design's contact
+    # points move by its sub-um warps, which must not make a new cache key or new matrices
+    fe_contact = analyse_contact(design.constant_pitch()) if design.graded else contact
+    cached = cached_influence(design.constant_pitch(), fe_contact, progress=progress)
+    fe = fe_load_model(analytic, cached.influence)
+    fe.details["fe"]["cache"] = cached.report()
+    return LoadModels(fe, {"analytic": analytic, "fe": fe}, cached)
+
+
 def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
-    """Contact points, theoretical screw diameter and load distribution of ``design``."""
+    """Contact points, theoretical screw diameter and load distribution of ``design``
+    (with the compliance model of ``design.loads.compliance``; with ``"fe"`` also the model
+    risk, ``.loads.model_risk``)."""
     contact = analyse_contact(design)
-    return Analysis(design, contact, analyse_loads(design, contact, progress=progress))
+    models = load_models(design, contact, progress)
+    return Analysis(design, contact, analyse_loads(design, contact, progress=progress, model=models.model,
+                                                   compare=models.compare))
 
 
 def design_pitch(design: PRSDesign, target: str | dict[str, Any] = "equal", name: str | None = None) -> PRSDesign:
     """A new design whose pitch lists give ``target`` load sharing at the design load:
-    ``"equal"`` or ``{"nut_roller": [...], "roller_screw": [...]}`` (mean 1 each)."""
-    return _design_pitch(design, target, name)
+    ``"equal"`` or ``{"nut_roller": [...], "roller_screw": [...]}`` (mean 1 each), under
+    the compliance model of ``design.loads.compliance``."""
+    return _design_pitch(design, target, name, model=load_models(design).model)
 
 
 def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trimesh.Trimesh"]:
@@ -275,9 +317,22 @@ def stage_loads(ctx: BuildContext) -> None:
     from prs_geom.exports.plots import plot_loads
 
     d = ctx.design
-    ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress)
+    models = load_models(d, ctx.contact, ctx.progress)
+    ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress, model=models.model,
+                                      compare=models.compare)
     rep = loads.report()
     ctx.report["loads"] = rep
+    if models.cache is not None and not models.cache.stored:
+        ctx.report["warnings"].append(f"the finite-element influence matrices could not be stored in "
+                                      f"{models.cache.folder} (they were computed and used; set "
+                                      f"$PRS_GEOM_CACHE to a writable folder to keep them)")
+    if loads.model_risk is not None:
+        from prs_geom.exports.plots import plot_model_risk
+
+        ctx.report["model_risk"] = loads.model_risk.report()
+        ctx.add_plot("model_risk", plot_model_risk, ctx.out, d.name, loads.model_risk)
+    else:
+        ctx.report["model_risk"] = dict(MODEL_RISK_NOT_COMPUTED)
     equal = loads.equal_load
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
     p = d.thread.pitch_mm

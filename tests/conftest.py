@@ -7,6 +7,16 @@ os.environ.setdefault("PRS_GEOM_MEMORY_BUDGET", "6G")
 # the suite runs its test files on every core (pytest-xdist): builds do their work in their own
 # process rather than spawning workers of their own; tests/test_golden.py runs both ways
 os.environ.setdefault("PRS_GEOM_WORKERS", "0")
+# the finite-element matrix cache of a test run goes to a folder of its own, never to the
+# user's ~/.cache (each xdist worker has its own; removed at exit)
+if "PRS_GEOM_CACHE" not in os.environ:
+    import atexit
+    import shutil
+    import tempfile
+
+    _cache = tempfile.mkdtemp(prefix="prs-geom-test-cache-")
+    os.environ["PRS_GEOM_CACHE"] = _cache
+    atexit.register(shutil.rmtree, _cache, True)
 
 from hypothesis import HealthCheck, settings  # noqa: E402
 

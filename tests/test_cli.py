@@ -87,6 +87,7 @@ INVALID = {
     "mesh.chord_tolerance_mm": out_of(1e-4, 0.1),
     **{f"materials.{part}.thermal_expansion_per_k": out_of(0.0, 1e-3) for part in MATERIAL_PARTS},
     "loads.tooth_width": bad_choice(("circumference-share", "ring", "contact-ellipse", "unit")),
+    "loads.compliance": bad_choice(("analytic", "fe")),
     "gears.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
     # besides <= 0: modules that cut the default roller (d_r = 8 mm) into no whole tooth number
     "gears.module_mm": st.one_of(non_positive, st.sampled_from([0.3, 0.7, 3.0])),

@@ -447,9 +447,7 @@ def theoretical_screw(design: PRSDesign, max_iter: int = 30) -> TheoreticalScrew
     cumulative shift into the screw (5.7 um on the default equal-load design).
     docs/theory/contact.md, "The theoretical diameter of a graded design"."""
     if design.graded:
-        from dataclasses import replace as _replace
-        design = design.with_changes(roller=_replace(design.roller, pitch_list_mm=None),
-                                     nut=_replace(design.nut, pitch_list_mm=None))
+        design = design.constant_pitch()
     target = design.contact.clearance_mm
     prec = design.contact.precision_mm
     r0 = 0.5 * design.screw.pitch_diameter_mm

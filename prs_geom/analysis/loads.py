@@ -85,7 +85,8 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
            "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
-           "yamamoto_compliance", "sensitivity_chunks"]
+           "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
+           "model_risk", "MODEL_RISK_FRACTIONS"]
 
 
 # --------------------------------------------------------------------------- Hertz
@@ -304,7 +305,9 @@ def design_pitches(design: PRSDesign, target_nr: Sequence[float] | None = None,
 
     Targets are load-distribution coefficients per tooth (mean 1; None = equal). The tooth
     loads are fixed by the target, so the compatibility equations give the pitch
-    differences directly: x = B f (docs/theory/loads.md).
+    differences directly: x = B f (docs/theory/loads.md). With a dense ``model.compliance``
+    (the FE tooth matrices) a tooth's deflection is its Hertz approach plus the row of the
+    dense compliance times all loads, so the lists hold under that coupled model.
     """
     model = model or build_model(design)
     n, z = model.n, model.z
@@ -324,8 +327,14 @@ def design_pitches(design: PRSDesign, target_nr: Sequence[float] | None = None,
     # per-tooth body terms d_j = S_{j+1} - S_j
     body_nr = np.diff(Snr @ f)
     body_rs = np.diff(Srs @ f)
-    D_nr = model.deflection("nr", f[:n])
-    D_rs = model.deflection("rs", f[n:])
+    if model.compliance is None:
+        D_nr = model.deflection("nr", f[:n])
+        D_rs = model.deflection("rs", f[n:])
+    else:
+        # Hertz of each contact plus the dense tooth compliance (its coupled neighbours)
+        lin = model.compliance @ f
+        D_nr = model.hertz_nr * f[:n] ** (2.0 / 3.0) + lin[:n]
+        D_rs = model.hertz_rs * f[n:] ** (2.0 / 3.0) + lin[n:]
     p = design.thread.pitch_mm
     # D_j - D_{j+1} = body_j + (gap step):  gap step nr = p_r - p_n, rs = p_s - p_r
     step_rs = (D_rs[:-1] - D_rs[1:]) - body_rs      # p_s - p_r,j
@@ -459,8 +468,7 @@ def _loads_section(design: PRSDesign, model: LoadModel,
 
     r = forward(design, model=model)
     tick()
-    const = design.with_changes(roller=replace(design.roller, pitch_list_mm=None),
-                                nut=replace(design.nut, pitch_list_mm=None))
+    const = design.constant_pitch()
     rc = forward(const, model=model)
     tick()
     lin = forward(design, model=model, linear_at=r.mean)
@@ -487,12 +495,139 @@ def _loads_section(design: PRSDesign, model: LoadModel,
                          "linearised_at_N": r.mean},
         "off_design": off,
         "sensitivity": sens,
-        "compliances": {"hertz_nr_mm_per_N2/3": model.hertz_nr, "hertz_rs_mm_per_N2/3": model.hertz_rs,
+        "compliances": {"model": compliance_model(model), "hertz_nr_mm_per_N2/3": model.hertz_nr, "hertz_rs_mm_per_N2/3": model.hertz_rs,
                         "tooth_nr_mm_per_N": model.tooth_nr, "tooth_rs_mm_per_N": model.tooth_rs,
                         "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
                         "body_nut_mm_per_N": model.body_nut, "details": model.details},
         "solver_iterations": r.iterations,
     }, r
+
+
+def compliance_model(model: LoadModel) -> str:
+    """The name of a load model's tooth compliance: ``"analytic"`` (the diagonal Yamamoto
+    terms), ``"fe"`` (finite-element tooth matrices, :mod:`prs_geom.analysis.fe.compliance`) or
+    ``"dense"`` (another dense compliance handed in)."""
+    if model.compliance is None:
+        return "analytic"
+    return str(model.details.get("compliance", "dense"))
+
+
+# --------------------------------------------------------------------------- model risk
+#: Loads of the model-risk study, as fractions of the design load (those of ``off_design``).
+MODEL_RISK_FRACTIONS = (0.25, 0.5, 1.0, 1.5)
+
+
+@dataclass(frozen=True)
+class ModelRiskCase:
+    """The coefficients of one set of pitch lists under one compliance model at one load.
+
+    ``pitch_lists``: ``"constant pitch"``, ``"design pitch lists"`` (the design's own) or
+    ``"equal load"``; ``designed_with``: the model the equal-load lists were designed with
+    (None for the other two); ``evaluated_with``: the model of this solve."""
+
+    pitch_lists: str
+    designed_with: str | None
+    evaluated_with: str
+    load_fraction: float
+    load_n: float
+    ldc_nut_roller: NDArray
+    ldc_roller_screw: NDArray
+    teeth_out_of_contact: int
+
+    @property
+    def label(self) -> str:
+        """E.g. ``"equal load designed with analytic, under fe"``."""
+        made = f" designed with {self.designed_with}" if self.designed_with else ""
+        return f"{self.pitch_lists}{made}, under {self.evaluated_with}"
+
+    def report(self) -> dict[str, Any]:
+        return {"pitch_lists": self.pitch_lists, "designed_with": self.designed_with,
+                "evaluated_with": self.evaluated_with, "load_fraction": self.load_fraction, "load_N": self.load_n,
+                "ldc_nut_roller": self.ldc_nut_roller.tolist(), "ldc_roller_screw": self.ldc_roller_screw.tolist(),
+                "max_ldc_nut_roller": float(self.ldc_nut_roller.max()),
+                "max_ldc_roller_screw": float(self.ldc_roller_screw.max()),
+                "min_ldc_nut_roller": float(self.ldc_nut_roller.min()),
+                "min_ldc_roller_screw": float(self.ldc_roller_screw.min()),
+                "max_ldc": float(max(self.ldc_nut_roller.max(), self.ldc_roller_screw.max())),
+                "teeth_out_of_contact": self.teeth_out_of_contact}
+
+
+@dataclass(frozen=True)
+class ModelRisk:
+    """How much the load sharing depends on the compliance model: every set of pitch lists
+    (constant pitch, the design's own lists when graded, the equal-load lists designed with
+    each model) evaluated with every model at every load fraction (:func:`model_risk`)."""
+
+    models: tuple[str, ...]
+    design_load_n: float
+    load_fractions: tuple[float, ...]
+    cases: tuple[ModelRiskCase, ...]
+
+    def case(self, pitch_lists: str, designed_with: str | None, evaluated_with: str,
+             load_fraction: float = 1.0) -> ModelRiskCase:
+        """The case of these lists under ``evaluated_with`` at ``load_fraction``."""
+        for c in self.cases:
+            if (c.pitch_lists, c.designed_with, c.evaluated_with) == (pitch_lists, designed_with, evaluated_with) \
+                    and c.load_fraction == load_fraction:
+                return c
+        raise KeyError((pitch_lists, designed_with, evaluated_with, load_fraction))
+
+    @property
+    def largest_model_difference(self) -> float:
+        """max |LDC under one model - LDC under another| over every tooth, side, set of
+        lists and load: how far the answer moves with the model."""
+        worst = 0.0
+        for c in self.cases:
+            for o in self.cases:
+                if (o.pitch_lists, o.designed_with, o.load_fraction) == (c.pitch_lists, c.designed_with,
+                                                                          c.load_fraction):
+                    worst = max(worst, float(np.abs(c.ldc_nut_roller - o.ldc_nut_roller).max()),
+                                float(np.abs(c.ldc_roller_screw - o.ldc_roller_screw).max()))
+        return worst
+
+    def report(self) -> dict[str, Any]:
+        """The ``model_risk`` section of report.json."""
+        return {"computed": True, "models": list(self.models), "design_load_N": self.design_load_n,
+                "load_fractions": list(self.load_fractions),
+                "largest_model_difference": self.largest_model_difference,
+                "cases": [c.report() for c in self.cases]}
+
+
+#: The ``model_risk`` section of a build that did not compute it.
+MODEL_RISK_NOT_COMPUTED = {
+    "computed": False,
+    "note": "not computed: the model risk compares the analytic and the finite-element compliance; build with "
+            "--compliance fe (or loads.compliance = \"fe\"; needs pip install \"prs-geom[fe]\")"}
+
+
+def model_risk(design: PRSDesign, models: dict[str, LoadModel],
+               fractions: Sequence[float] = MODEL_RISK_FRACTIONS) -> ModelRisk:
+    """Every set of pitch lists under every model (by name) at every load fraction.
+
+    The lists: constant pitch, the design's own lists when it is graded, and for each model
+    the equal-load lists designed with it (:func:`design_pitches`). One batched solve per
+    set of lists and model."""
+    F0 = design.loading.axial_load_n
+    p = design.thread.pitch_mm
+    k = design.thread.engaged_teeth - 1
+    lists: list[tuple[str, str | None, Sequence[float], Sequence[float]]] = [
+        ("constant pitch", None, [p] * k, [p] * k)]
+    if design.graded:
+        lists.append(("design pitch lists", None, design.pitch_list("roller"), design.pitch_list("nut")))
+    for name, m in models.items():
+        pd = design_pitches(design, model=m)
+        lists.append(("equal load", name, pd.roller_mm, pd.nut_mm))
+    fr = np.array([float(f) for f in fractions])
+    cases = []
+    for label, made, pr, pn in lists:
+        g_nr, g_rs = gap_terms(design, pr, pn)
+        for name, m in models.items():
+            b = solve_loads_batch(m, fr * F0, np.tile(g_nr, (fr.size, 1)), np.tile(g_rs, (fr.size, 1)))
+            for i in range(fr.size):
+                r = b[i]
+                cases.append(ModelRiskCase(label, made, name, float(fr[i]), float(fr[i] * F0), r.ldc_nr, r.ldc_rs,
+                                           int((~r.active_nr).sum() + (~r.active_rs).sum())))
+    return ModelRisk(tuple(models), F0, tuple(float(f) for f in fr), tuple(cases))
 
 
 @dataclass(frozen=True)
@@ -515,6 +650,7 @@ class LoadsResult:
     designed_label: str
     designed_roller_mm: tuple[float, ...]
     designed_nut_mm: tuple[float, ...]
+    model_risk: ModelRisk | None = None
 
     @property
     def ldc_nut_roller(self) -> NDArray:
@@ -537,10 +673,15 @@ class LoadsResult:
 
 
 def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
-                  progress: ProgressFn | None = None) -> LoadsResult:
+                  progress: ProgressFn | None = None, model: LoadModel | None = None,
+                  compare: dict[str, LoadModel] | None = None) -> LoadsResult:
     """The loads stage: forward solve, report section, equal-load design and the curves
-    of the designed state (see :class:`LoadsResult`)."""
-    model = build_model(design, contact)
+    of the designed state (see :class:`LoadsResult`).
+
+    ``model``: the load model to use (default the analytic :func:`build_model`; the FE one
+    comes from :func:`prs_geom.analysis.fe.compliance.fe_load_model`). ``compare``: models by
+    name for the model-risk study (:func:`model_risk`), or None for none."""
+    model = build_model(design, contact) if model is None else model
     section, result = _loads_section(design, model, progress)
     equal = design_pitches(design, model=model)
     if design.graded:
@@ -553,21 +694,23 @@ def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
         shown = {"ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist()}
         off, label = off_design(eq, model=model), "equal-load pitch design"
         pr, pn = equal.roller_mm, equal.nut_mm
-    return LoadsResult(model, result, section, equal, shown, off, label, pr, pn)
+    risk = model_risk(design, compare) if compare else None
+    return LoadsResult(model, result, section, equal, shown, off, label, pr, pn, risk)
 
 
 def design_pitch(design: PRSDesign, target: str | dict[str, Sequence[float]] = "equal",
-                 name: str | None = None, contact: ContactResult | None = None) -> PRSDesign:
+                 name: str | None = None, contact: ContactResult | None = None,
+                 model: LoadModel | None = None) -> PRSDesign:
     """A new design whose roller and nut pitch lists give the target load sharing at the
     design load: ``"equal"`` (every coefficient 1) or ``{"nut_roller": [...],
     "roller_screw": [...]}`` (n coefficients each, mean 1). Named ``name`` or
-    ``<name>-graded``."""
+    ``<name>-graded``. ``model``: the load model (default the analytic one)."""
     if isinstance(target, str):
         if target != "equal":
             raise DesignError("target", target, 'must be "equal" or a mapping of coefficient lists')
         t_nr = t_rs = None
     else:
         t_nr, t_rs = target.get("nut_roller"), target.get("roller_screw")
-    model = build_model(design, contact)
+    model = build_model(design, contact) if model is None else model
     pd = design_pitches(design, t_nr, t_rs, model=model)
     return with_pitch_lists(design, pd, name=name or f"{design.name}-graded")

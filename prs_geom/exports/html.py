@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from prs_geom.analysis.contact import ContactResult
-from prs_geom.analysis.loads import LoadsResult
+from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
@@ -322,6 +322,52 @@ def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     return "".join(out)
 
 
+def _compliance_text(comp: dict[str, Any]) -> str:
+    """One sentence naming the tooth-compliance model of a loads section."""
+    details = comp.get("details", {})
+    if comp.get("model") == "fe":
+        fe = details["fe"]
+        cache = fe.get("cache", {})
+        hits = cache.get("read_from_cache", {})
+        src = ("read from the cache" if hits and all(hits.values()) else "computed and cached") if cache else "computed"
+        return (f"Tooth compliance: axisymmetric finite-element influence matrices (mesh level {fe['mesh_level']}, "
+                f"{fe['teeth']} teeth, {fe['n_dofs']:,} degrees of freedom, {src}), coupled between teeth and "
+                f"between a roller's flanks; Hertz contact and 1D bodies as in the analytic model.")
+    return (f"Tooth compliance: Yamamoto's terms, diagonal, width convention "
+            f"'{html.escape(str(details.get('tooth_width', '')))}'.")
+
+
+def _model_risk_html(loads: LoadsResult, svgs: dict[str, str]) -> str:
+    """The model-risk part of the loads section: every set of pitch lists under every
+    compliance model (table at the design load, worst over the loads, plots)."""
+    out = [f"<p class='note'>{html.escape(_compliance_text(loads.report()['compliances']))}</p>",
+           "<h3 id='model-risk'>Model risk: analytic against finite-element compliance</h3>"]
+    risk = loads.model_risk
+    if risk is None:
+        return "".join(out) + f"<p class='note'>{html.escape(MODEL_RISK_NOT_COMPUTED['note'])}.</p>"
+    out.append("<p class='note'>Each set of pitch lists evaluated with each compliance model. A list designed "
+               "for equal load with one model shares equally only under that model; the spread between the rows "
+               f"is how much the answer depends on the model (largest difference of a coefficient "
+               f"{risk.largest_model_difference:.4f}).</p>")
+    rows = []
+    for c in risk.cases:
+        if c.load_fraction != 1.0:
+            continue
+        others = [o for o in risk.cases if (o.pitch_lists, o.designed_with, o.evaluated_with)
+                  == (c.pitch_lists, c.designed_with, c.evaluated_with)]
+        worst = max(max(float(o.ldc_nut_roller.max()), float(o.ldc_roller_screw.max())) for o in others)
+        rows.append([c.pitch_lists + (f" (designed with {c.designed_with})" if c.designed_with else ""),
+                     c.evaluated_with, f"{c.ldc_nut_roller.min():.4f} - {c.ldc_nut_roller.max():.4f}",
+                     f"{c.ldc_roller_screw.min():.4f} - {c.ldc_roller_screw.max():.4f}", f"{worst:.4f}"])
+    out.append(_table(rows, ["pitch lists", "evaluated with", "nut-roller LDC at design load",
+                             "roller-screw LDC at design load",
+                             "worst LDC over " + ", ".join(f"{f * 100:g} %" for f in risk.load_fractions)]))
+    shown = [svgs[f] for f in ("model_risk_ldc", "model_risk_loads") if f in svgs]
+    if shown:
+        out.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")
+    return "".join(out)
+
+
 def _mechanism_html(m: dict[str, Any]) -> str:
     """Carriers, journals, retaining rings: the checks with pass/fail, the fits, the journal
     clearances measured on the meshes and the axial stack-up."""
@@ -401,6 +447,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                              ["axial stiffness (N/um)", L["axial_stiffness_N_per_um"]]]))
         shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
         parts.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")
+        parts.append(_model_risk_html(loads, plots_svg or {}))
     if rating is not None:
         parts.append(_rating_html(rating, plots_svg or {}))
     if tolerance is not None:

@@ -26,6 +26,8 @@ import numpy as np
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from prs_geom.analysis.loads import ModelRisk
+
 
 @functools.cache
 def _matplotlib() -> Any:
@@ -179,6 +181,54 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
     fig = _per_side(off_curves, ", design pitches", "load-distribution coefficient",
                     f"{name}: off-design load distribution")
     files += save_figure(fig, out, "off_design", svgs)
+    return files
+
+
+def plot_model_risk(out: Path, name: str, risk: "ModelRisk", svgs: dict[str, str] | None = None) -> list[str]:
+    """Two figures of the model-risk study (:class:`~prs_geom.analysis.loads.ModelRisk`):
+    ``model_risk_ldc``, the coefficients per tooth of every set of pitch lists under every
+    compliance model at the design load (colour: the lists; line: the model), and
+    ``model_risk_loads``, the worst coefficient per side over the load fractions."""
+    files = []
+    groups: list[tuple[str, str | None]] = []
+    for c in risk.cases:
+        if (c.pitch_lists, c.designed_with) not in groups:
+            groups.append((c.pitch_lists, c.designed_with))
+    styles = {m: ls for m, ls in zip(risk.models, ("-", "--", ":", "-."))}
+    markers = {m: mk for m, mk in zip(risk.models, ("o", "s", "^", "v"))}
+
+    def label(lists: str, made: str | None, model: str) -> str:
+        return f"{lists}{f' ({made})' if made else ''} under {model}"
+
+    def per_tooth(ax, key):
+        for gi, (lists, made) in enumerate(groups):
+            for model in risk.models:
+                c = risk.case(lists, made, model, 1.0)
+                v = getattr(c, key)
+                ax.plot(np.arange(1, v.size + 1), v, linestyle=styles[model], marker=markers[model], ms=3,
+                        color=f"C{gi}", label=label(lists, made, model))
+
+    fig = _per_side(per_tooth, "", "load-distribution coefficient f_j / (F0 / n z)",
+                    f"{name}: model risk at the design load ({risk.design_load_n:g} N)")
+    fig.axes[0].legend(fontsize=7)
+    files += save_figure(fig, out, "model_risk_ldc", svgs)
+
+    fig, axes = _figure(1, 2, figsize=(10, 4), sharey=True)
+    fr = np.array(risk.load_fractions) * 100.0
+    for ax, key, side in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
+        for gi, (lists, made) in enumerate(groups):
+            for model in risk.models:
+                worst = [float(getattr(risk.case(lists, made, model, f), key).max()) for f in risk.load_fractions]
+                ax.plot(fr, worst, linestyle=styles[model], marker=markers[model], color=f"C{gi}",
+                        label=label(lists, made, model))
+        ax.axhline(1.0, color="0.6", lw=0.8)
+        ax.set_title(f"{side}: worst coefficient")
+        ax.set_xlabel("load (% of the design load)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("worst load-distribution coefficient")
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"{name}: model risk over the load")
+    files += save_figure(fig, out, "model_risk_loads", svgs)
     return files
 
 

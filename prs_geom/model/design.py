@@ -231,6 +231,8 @@ class Loading:
 
 #: Tooth-width conventions of the Yamamoto tooth terms (docs/theory/loads.md, "Tooth width").
 TOOTH_WIDTHS = ("circumference-share", "ring", "contact-ellipse", "unit")
+#: Tooth-compliance models of the load model (docs/theory/fe.md).
+COMPLIANCE_MODELS = ("analytic", "fe")
 
 
 @dataclass(frozen=True)
@@ -247,12 +249,22 @@ class LoadSettings:
     * ``"contact-ellipse"``: the circumferential diameter 2 b of the Hertz contact ellipse at
       the design load;
     * ``"unit"``: 1 mm (the formulas as published, per unit width).
+
+    ``compliance``: the linear tooth compliance of the load model:
+
+    * ``"analytic"`` (default): the diagonal Yamamoto terms at ``tooth_width``;
+    * ``"fe"``: the axisymmetric finite-element influence matrices of the teeth, coupled
+      between neighbouring teeth and between a roller's two flanks (docs/theory/fe.md;
+      needs the optional extra ``prs-geom[fe]``; computed once per geometry and material and
+      cached). ``tooth_width`` then only sets the analytic model of the model-risk study.
     """
 
     tooth_width: str = "circumference-share"
+    compliance: str = "analytic"
 
     def __post_init__(self) -> None:
         choice("tooth_width", self.tooth_width, TOOTH_WIDTHS)
+        choice("compliance", self.compliance, COMPLIANCE_MODELS)
 
 
 #: Distributions of a tolerance: uniform within +-T, or normal with T = 3 sigma.
@@ -819,6 +831,12 @@ class PRSDesign:
     def with_changes(self, **sections: Any) -> "PRSDesign":
         """A new validated design with whole sections or the name replaced."""
         return replace(self, **sections)
+
+    def constant_pitch(self) -> "PRSDesign":
+        """The same design without pitch lists (every part at the constant pitch)."""
+        if not self.graded:
+            return self
+        return replace(self, roller=replace(self.roller, pitch_list_mm=None), nut=replace(self.nut, pitch_list_mm=None))
 
 
 def default_design() -> PRSDesign:

@@ -76,6 +76,8 @@ FIELD_COMMENTS: dict[str, str] = {
     "mechanism.ring_bore_mm": "DIN 472 ring size = nut end bore (mm); omit for the smallest that fits",
     "mechanism.length_tolerance": 'ISO 286 zone of the axial lengths in the stack-up (e.g. "js11")',
     "loads.tooth_width": 'width of the Yamamoto tooth terms: "circumference-share", "ring", "contact-ellipse" or "unit"',
+    "loads.compliance": 'tooth compliance of the load model: "analytic" (Yamamoto) or "fe" (finite-element '
+                        'influence matrices; needs prs-geom[fe])',
     "tolerances.distribution": '"uniform" (within +-T) or "normal" (T = 3 sigma)',
     "tolerances.flank_um": "axial position tolerance of every loaded flank (um)",
     "tolerances.screw_flank_um": "per-tooth tolerance of the screw flank (um), overrides flank_um",

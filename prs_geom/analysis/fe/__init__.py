@@ -6,18 +6,20 @@ Owns the structured graded meshes of a part's engaged section
 (:mod:`~prs_geom.analysis.fe.halfplane`) and, from a design, the teeth's influence
 matrices and the calibration of Yamamoto's tooth width (:mod:`~prs_geom.analysis.fe.teeth`).
 Pure math like the rest of :mod:`prs_geom.analysis`: numpy, scipy and scikit-fem, no file
-I/O and no mesh library. docs/theory/fe.md explains the model.
+I/O and no mesh library; :mod:`~prs_geom.analysis.fe.compliance` turns the matrices into the
+load model's coupled tooth compliance. docs/theory/fe.md explains the model.
 
 scikit-fem is the optional extra ``fe`` (in the test extra): without it, importing this
 package raises :class:`~prs_geom.model.errors.EnvironmentFailure` (exit code 3 in the CLI)
 with the install command.
 """
-try:
-    import skfem  # noqa: F401
-except ImportError:  # pragma: no cover - exercised by tests/test_fe.py with the import blocked
+import importlib.util
+
+# found, not imported (0.6 s): a cached matrix needs numpy alone; axisym imports it to compute
+if importlib.util.find_spec("skfem") is None:  # pragma: no cover - tests/test_fe.py blocks the import
     from prs_geom.model.errors import EnvironmentFailure
 
-    raise EnvironmentFailure('the finite-element model needs scikit-fem: pip install "prs-geom[fe]"') from None
+    raise EnvironmentFailure('the finite-element model needs scikit-fem: pip install "prs-geom[fe]"')
 
 from prs_geom.analysis.fe.teeth import (CONVERGED_LEVEL, DEFAULT_TEETH, ConvergenceStudy, InfluenceMatrices,
                                         LoadedFlank, PartInfluence, PartSection, ToothCalibration, WidthCalibration,

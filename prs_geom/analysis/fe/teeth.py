@@ -66,16 +66,20 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
-from prs_geom.analysis.fe.axisym import AxisymmetricModel
 from prs_geom.analysis.fe.halfplane import HertzEllipse, band_weight, hertz_semi_axes, local_term
 from prs_geom.analysis.fe.mesh import ThreadSection, thread_section_mesh
 from prs_geom.analysis.loads import build_model
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.model.design import PRSDesign
+
+if TYPE_CHECKING:  # pragma: no cover
+    from prs_geom.analysis.fe.axisym import AxisymmetricModel
 
 __all__ = ["LoadedFlank", "PartSection", "PartInfluence", "InfluenceMatrices", "ConvergenceStudy",
            "ToothCalibration", "WidthCalibration", "part_sections", "band_loads", "part_influence",
@@ -388,6 +392,10 @@ def part_influence(sec: PartSection, level: int = CONVERGED_LEVEL, teeth: int = 
     if teeth < 3:
         raise ValueError("a section needs at least 3 teeth (an interior tooth)")
     t0 = time.perf_counter()
+    # scikit-fem is imported only to compute: the sections, the matrices' type and a cache
+    # reader need numpy alone
+    from prs_geom.analysis.fe.axisym import AxisymmetricModel
+
     mesh = thread_section_mesh(sec.thread_section(teeth), level)
     model = AxisymmetricModel(mesh, sec.youngs_modulus_mpa, sec.poisson_ratio, fixed=((sec.support_face, 1),))
     loads, zc, sign = [], [], []
