@@ -255,6 +255,14 @@ def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
     return design
 
 
+def _design_model(design: PRSDesign):
+    """The load model of the design's ``loads.compliance`` (FE matrices from the cache)."""
+    design = _with_compliance(design, argparse.Namespace())
+    from prs_geom.pipeline import load_models
+
+    return load_models(design).model
+
+
 def _print_model_risk(risk, models) -> None:
     """The model-risk table of ``loads --compliance fe`` (worst and least coefficient per side
     at the design load)."""
@@ -274,7 +282,6 @@ def _print_model_risk(risk, models) -> None:
 
 def cmd_rating(args: argparse.Namespace) -> int:
     from prs_geom.analysis.contact import analyse_contact
-    from prs_geom.analysis.loads import build_model
     from prs_geom.analysis.rating import analyse_rating, rating_case
 
     design = _load(args.design)
@@ -289,7 +296,10 @@ def cmd_rating(args: argparse.Namespace) -> int:
                               "the ratings need speed_rpm on every [[case]] (the life is counted in revolutions)")
     case = rating_case(design, spectrum, args.mean_load, args.speed_rpm, args.life_hours, args.fw, args.reliability)
     contact = analyse_contact(design)
-    model = build_model(design, contact)
+    design = _with_compliance(design, args)
+    from prs_geom.pipeline import load_models
+
+    model = load_models(design, contact).model           # the design's loads.compliance, as in build
     robust, note = None, "needs a load spectrum (--spectrum FILE)"
     if spectrum is not None:
         from prs_geom import studies
@@ -480,7 +490,8 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         F0 = design.loading.axial_load_n
         fractions = tols.load_fractions if loads is None else tuple(F / F0 for F in loads)
         res = studies.synthesise(design, args.target_ldc, args.confidence, tols, samples=tols.samples,
-                                 seed=tols.seed, load_fractions=fractions, execution=execution)
+                                 seed=tols.seed, load_fractions=fractions, execution=execution,
+                                 model=_design_model(design))
         out = {"samples": tols.samples, "seed": tols.seed, "synthesis": res.report()}
         if res.feasible and args.out:
             from dataclasses import replace
@@ -497,7 +508,8 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         return EXIT_OK if res.feasible else EXIT_FOUND
     if args.out:
         raise UsageError("--out writes synthesised tolerances: give --target-ldc")
-    study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence)
+    study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence,
+                                    model=_design_model(design))
     if args.json:
         _print_json(study.section)
         return EXIT_OK
@@ -553,16 +565,17 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
 
     if args.target != "equal":
         raise UsageError("--robust chooses its own load sharing: leave out --target")
-    if args.compliance == "fe":
-        raise UsageError("--robust designs with the analytic compliance (its Monte Carlo study would need the "
-                         "finite-element solve per sample): leave out --compliance fe")
     if args.out:
         check_output_file(args.out, args.force)            # refuse before the work
     spectrum = load_spectrum(args.spectrum) if args.spectrum else Spectrum.single(design.loading.axial_load_n)
     tols = _cli_tolerances(args, design)
     quantile = 0.95 if args.quantile is None else args.quantile
     samples = args.samples if args.samples is not None else 200
-    res = studies.robust_pitch(design, spectrum, tols, quantile=quantile, samples=samples, seed=tols.seed,
+    design = _with_compliance(design, args)
+    from prs_geom.pipeline import load_models
+
+    model = load_models(design, progress=silent if args.json else StderrProgress()).model
+    res = studies.robust_pitch(design, spectrum, tols, quantile=quantile, samples=samples, seed=tols.seed, model=model,
                                execution=_execution(args, quiet=args.json),
                                name=args.name or f"{design.name}-robust")
     c = res.comparison

@@ -181,9 +181,35 @@ def test_loads_text_prints_the_model_risk(models_tc):
             assert "1.0000-1.0000" in line
 
 
-def test_robust_refuses_the_fe_compliance():
-    code, _, err = run(["design-pitch", "--robust", "--compliance", "fe"])
-    assert code == 2 and "--compliance fe" in err
+def test_robust_and_rating_use_the_chosen_compliance(models_tc):
+    """``design-pitch --robust --compliance fe`` studies the lists under the FE (constant
+    pitch is the FE's 1.474, not the analytic 1.429); ``rating`` of a design whose
+    loads.compliance is "fe" rates its FE tooth loads, as the build does."""
+    code, out, err = run(["design-pitch", "--robust", "--compliance", "fe", "--samples", "4", "--json",
+                          "--workers", "1"])
+    assert code == 0, err
+    res = json.loads(out)
+    const_fe = forward(default_design(), model=models_tc.model)
+    worst = max(const_fe.ldc_nr.max(), const_fe.ldc_rs.max())
+    assert res["constant_pitch"]["objective"] == pytest.approx(worst, abs=1e-12)
+    assert res["equal_at_design_load"]["objective"] == pytest.approx(1.0, abs=1e-9)
+    code, out_a, _ = run(["rating", "--json"])
+    assert code == 0
+    from cli_helpers import to_toml
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        f = Path(tmp) / "fe.toml"
+        f.write_text(to_toml({"loads": {"compliance": "fe"}}))
+        code, out_f, err = run(["rating", str(f), "--json"])
+    assert code == 0, err
+    a, fe = json.loads(out_a), json.loads(out_f)
+    # Hertz pressure goes as the tooth load^(1/3): the constant-pitch first tooth of the
+    # roller-screw side carries 1.474 (FE) instead of 1.429 (analytic) times the mean
+    const_a = forward(default_design(), model=models_tc.compare["analytic"])
+    ratio = (const_fe.ldc_rs[0] / const_a.ldc_rs[0]) ** (1.0 / 3.0)
+    pa = a["distribution_life"]["constant_pitch"]["hertz_pressure_mpa"]["roller_screw"][0]
+    pf = fe["distribution_life"]["constant_pitch"]["hertz_pressure_mpa"]["roller_screw"][0]
+    assert pf / pa == pytest.approx(ratio, rel=1e-9) and ratio > 1.01
 
 
 # --------------------------------------------------------------------------- missing extra
