@@ -10,10 +10,12 @@ teeth (what ``--compliance fe`` uses):
 2. warm: the same call reading the cache, in this process (median of 5) and in a fresh
    interpreter (the call alone; goal: <= 0.5 s), with that interpreter's import time;
 3. the load analysis: ``analyse_loads`` with the FE model (model risk included) against the
-   analytic one, as a ratio measured in the same run.
+   analytic one, as a ratio measured in the same run;
+4. without ``--quick``: the 7-tooth sections of the calibration studies and the convergence
+   study over levels 0, 1, 2 with the Richardson estimate (docs/theory/fe.md, Convergence).
 
-``--quick`` skips the 7-tooth section table. Wall times on this machine are noisy; the
-ratios in (3) are the comparable numbers.
+``--quick`` skips (4). Wall times on this machine are noisy; the ratios in (3) are the
+comparable numbers.
 """
 from __future__ import annotations
 
@@ -26,7 +28,9 @@ import time
 from pathlib import Path
 
 from prs_geom.analysis.contact import analyse_contact
-from prs_geom.analysis.fe import CONVERGED_LEVEL, DEFAULT_TEETH, influence_matrices
+import numpy as np
+
+from prs_geom.analysis.fe import CONVERGED_LEVEL, DEFAULT_TEETH, convergence_study, influence_matrices
 from prs_geom.analysis.loads import analyse_loads
 from prs_geom.fe_cache import cached_influence
 from prs_geom.model.design import default_design
@@ -89,6 +93,14 @@ def main(quick: bool = False) -> None:
         mats = influence_matrices(design, level=CONVERGED_LEVEL, teeth=DEFAULT_TEETH, contact=contact)
         print(f"{DEFAULT_TEETH}-tooth sections (calibration studies): {time.perf_counter() - t0:.2f} s, "
               f"{mats.n_dofs} dofs")
+        t0 = time.perf_counter()
+        study = convergence_study(design, (0, 1, 2), teeth=DEFAULT_TEETH, contact=contact)
+        print(f"convergence, levels 0-1-2 of {DEFAULT_TEETH}-tooth sections ({time.perf_counter() - t0:.1f} s): "
+              f"largest change of a diagonal entry from level 1 to 2, observed order, Richardson error of level 2")
+        for part in ("screw", "roller", "nut"):
+            order = study.order[part]
+            print(f"  {part:>7}: {study.finest_change[part] * 100:.3f} % (goal <= 0.5 %), order "
+                  f"{np.nanmin(order):.2f}-{np.nanmax(order):.2f}, error <= {study.error_estimate[part].max() * 100:.3f} %")
 
 
 if __name__ == "__main__":

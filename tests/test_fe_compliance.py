@@ -107,6 +107,16 @@ def test_fe_designed_lists_share_equally_under_the_fe(which, request):
     assert max(np.abs(ra.ldc_nr - 1).max(), np.abs(ra.ldc_rs - 1).max()) > 0.02
 
 
+def test_converged_matrices_are_symmetric_and_definite(models_tc):
+    """The matrices the load model uses (level 1, 20 teeth): Maxwell-Betti within 1e-8
+    relative on every part, and the pair compliance positive definite."""
+    for part in models_tc.cache.influence:
+        assert part.level == CONVERGED_LEVEL and part.teeth == 20
+        assert part.asymmetry < 1e-8, (part.part, part.asymmetry)
+    lo, hi = models_tc.model.details["fe"]["eigenvalues_mm_per_N"]
+    assert 0 < lo < hi
+
+
 def test_model_risk_cases_are_the_forward_solves(models_tc):
     """Every case of the study is the forward solve of its lists under its model; the
     diagonal entries (lists designed with a model, evaluated with it) share equally."""
