@@ -28,7 +28,6 @@ from __future__ import annotations
 import hashlib
 import io
 import os
-import tempfile
 import time
 import zipfile
 from dataclasses import dataclass
@@ -37,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from prs_geom.model.io import write_file_atomic
 from prs_geom.progress import ProgressFn, silent
 
 __all__ = ["CachedInfluence", "cache_dir", "part_key", "cached_influence", "require_fe"]
@@ -118,20 +118,11 @@ def _write(path: Path, pi: Any, description: str) -> bool:
     np.savez(buf, description=np.array(description), part=np.array(pi.part), flanks=np.array(list(pi.flanks)),
              support_face=np.array(pi.support_face), **{k: np.asarray(getattr(pi, k)) for k in _ARRAYS},
              **{k: np.array(getattr(pi, k)) for k in _SCALARS})
-    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(buf.getvalue())
-        os.replace(tmp, path)
+        write_file_atomic(path, buf.getvalue())
         return True
     except OSError:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
         return False
 
 
