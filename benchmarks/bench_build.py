@@ -16,7 +16,12 @@ Prints
 3. scaling with engaged teeth (20, 100, 200): build time and peak memory, ratio to n = 20
    (goal: n = 200 <= 10 x the n = 20 build, under 1 GB);
 4. scaling with chord tolerance (10, 1, 0.1 um) of the meshing plus mesh-file writing job
-   (the baseline of 1, in a fresh interpreter): time and peak memory, ratio to 10 um.
+   (the baseline of 1, in a fresh interpreter): time and peak memory, ratio to 10 um;
+5. the console and interrupts (issue 28): the longest silent gap on stderr of a default
+   build with its progress display in plain-line mode, from the first line to the exit
+   (goal <= 2 s), and the delay from SIGINT to the exit of a build interrupted at several
+   points, sent to the main process only and to the whole process group (goal: prompt,
+   well under the 16 s a build once took; the exit code must be 130).
 
 ``--quick`` drops n = 200 and 0.1 um (the heavy cases) and uses one repetition.
 Peak memory is the build's maximum resident set size plus that of its largest worker
@@ -196,6 +201,62 @@ def teeth_design(tmp: Path, teeth: int) -> Path:
     return path
 
 
+def silent_gap(tmp: Path) -> tuple[float, float, int]:
+    """(longest gap between two stderr lines after the first, wall time, lines) of a default
+    build with the plain-line progress display (stderr is a pipe)."""
+    import threading
+
+    exe = str(Path(sys.executable).parent / "prs-geom")
+    out = tmp / "gap"
+    t0 = time.monotonic()
+    proc = subprocess.Popen([exe, "build", "--out", str(out)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    stamps: list[float] = []
+
+    def read() -> None:
+        assert proc.stderr is not None
+        for _ in proc.stderr:
+            stamps.append(time.monotonic())
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    proc.wait()
+    end = time.monotonic()
+    reader.join()
+    shutil.rmtree(out, ignore_errors=True)
+    # the stage table and "wrote ..." come at the end together; the process exit closes the last gap
+    points = stamps + [end]
+    gaps = [b - a for a, b in zip(points, points[1:])]
+    return max(gaps), end - t0, len(stamps)
+
+
+def interrupt_delay(tmp: Path, after_s: float, group: bool) -> tuple[float, int]:
+    """(seconds from SIGINT to exit, exit code) of a default build interrupted ``after_s``
+    seconds after its start, by a signal to the main process or to its process group."""
+    import os
+    import signal
+
+    exe = str(Path(sys.executable).parent / "prs-geom")
+    out = tmp / "sigint"
+
+    def child_setup() -> None:
+        os.setsid()
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    proc = subprocess.Popen([exe, "build", "--out", str(out), "--quiet"], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, preexec_fn=child_setup)
+    time.sleep(after_s)
+    t0 = time.monotonic()
+    if group:
+        os.killpg(proc.pid, signal.SIGINT)
+    else:
+        os.kill(proc.pid, signal.SIGINT)
+    code = proc.wait()
+    delay = time.monotonic() - t0
+    shutil.rmtree(out, ignore_errors=True)
+    return delay, code
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the heavy cases, one repetition")
@@ -250,6 +311,20 @@ def main() -> None:
             w, p = best_child([f"{tol_um / 1000:g}", str(o)], 1, o, MESH_CHILD)
             ref = ref or w
             print(f"   {tol_um:5.1f} um: {w:7.2f} s, peak {p / 1024:6.0f} MB, time / (10 um) {w / ref:6.2f}")
+
+        print("5. console and interrupts")
+        gap, total, n_lines = silent_gap(tmp)
+        print(f"   default build, plain progress lines: {n_lines} lines in {total:.1f} s, longest silent "
+              f"gap {gap:.2f} s (goal <= 2 s)")
+        worst = {False: 0.0, True: 0.0}
+        for after in (1.0, 3.0, 5.0, 7.0):
+            for group in (False, True):
+                delay, code = interrupt_delay(tmp, after, group)
+                worst[group] = max(worst[group], delay)
+                print(f"   SIGINT to the {'process group' if group else 'main process'} at {after:.0f} s: "
+                      f"exit {code} after {delay:.2f} s")
+        print(f"   worst delay SIGINT -> exit: main process {worst[False]:.2f} s, process group "
+              f"{worst[True]:.2f} s")
 
 
 if __name__ == "__main__":

@@ -5,11 +5,12 @@ Exit codes (docs/cli.md "Exit codes"):
 * 0 success;
 * 1 the analysis found a problem (e.g. interference) or a solver did not converge;
 * 2 bad input: a design value (the message names the field, the value and the rule), a
-  command-line flag, an output path that holds files prs-geom did not write, or a job
-  larger than the memory budget; nothing is written;
+  command-line flag, or an output path that holds files prs-geom did not write (or files it
+  wrote that were edited since); nothing is written;
 * 3 the environment cannot do it: a path that cannot be read or written (permission,
-  disk full, missing folder; the message names the path and the OS reason) or a missing
-  optional extra (the message gives the install command);
+  disk full, missing folder; the message names the path and the OS reason), a missing
+  optional extra (the message gives the install command) or a job larger than the memory
+  budget; checked before any work, nothing is written;
 * 70 an internal error (a bug: please report it with the ``--debug`` traceback);
 * 130 interrupted by Ctrl-C (SIGINT), 143 terminated (SIGTERM): the temporary output is
   removed and one line ``interrupted`` is printed.
@@ -31,7 +32,7 @@ from prs_geom.exports.output import check_output_dir
 from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, ResourceLimitError, parse_size
 from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
-from prs_geom.progress import StderrProgress, silent
+from prs_geom.progress import ConsoleProgress, silent
 
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
@@ -98,17 +99,32 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
-    from prs_geom.background import default_workers
-    from prs_geom.mesh.budget import estimate
-
     design = _load_any(args.design)
     _warn(design)
     if isinstance(design, PRSDesign):
-        est = estimate(design, workers=default_workers())
-        print(f"design {design.name} is valid; a build meshes {est.describe()}")
+        from prs_geom.model.plausibility import design_warnings
+
+        # plausible ranges (probably a unit slip) and roller drift: warnings, exit 0
+        for msg in design_warnings(design):
+            print(f"warning: {msg}", file=sys.stderr)
+        from prs_geom.pipeline import plan_build
+
+        # the same estimate and worker plan as build (exit 2 when build would refuse it)
+        workers, est = plan_build(design, _memory_budget(args))
+        where = f"with {workers} worker processes" if workers else "in one process"
+        print(f"design {design.name} is valid; a build ({where}) meshes {est.describe()}")
     else:
         print(f"design {design.name} (harmonic) is valid")
     return EXIT_OK
+
+
+def _inside(design_file: str | None, out: Path) -> list[str]:
+    """The design file as a path inside the output folder ``out`` (POSIX, relative), if it
+    lies there: a build keeps it byte for byte."""
+    if design_file is None:
+        return []
+    src, folder = Path(design_file).resolve(), out.resolve()
+    return [src.relative_to(folder).as_posix()] if folder in src.parents else []
 
 
 def cmd_build(args: argparse.Namespace) -> int:
@@ -121,12 +137,24 @@ def cmd_build(args: argparse.Namespace) -> int:
     if isinstance(design, PRSDesign):
         design = _with_compliance(design, args)
     out = Path(args.out) if args.out else Path("exports") / design.name
-    check_output_dir(out)   # refuse before any work
-    progress = silent if args.quiet else StderrProgress()
+    from prs_geom.exports.output import legacy_manifest
+
+    # every precondition before any work: the output folder (edited files need --force; the
+    # design file may lie inside it), the optional extra, the memory (in build())
+    check_output_dir(out, force=args.force, keep=_inside(args.design, out))
+    if legacy_manifest(out):
+        print(f"warning: {out} was written by an older prs-geom (its manifest records names, not "
+              f"contents): it is replaced this once without checking for edited files", file=sys.stderr)
+    if args.step:
+        from prs_geom.exports.step import require_ocp
+
+        require_ocp()
+    progress = args.progress
     from prs_geom.pipeline import BuildOptions
 
     options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step)
-    report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options)
+    report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options,
+                   force=args.force, source=args.design)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
     for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
         print(f"warning: {msg}", file=sys.stderr)
@@ -180,7 +208,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     design = _load(args.design)
     _warn(design)
     guard(design, _memory_budget(args), export=False, check=True)
-    progress = silent if args.quiet else StderrProgress()
+    progress = args.progress
     rep = interference(design, args.screw, progress=progress)
     if args.json:
         _print_json(rep)
@@ -212,7 +240,7 @@ def cmd_loads(args: argparse.Namespace) -> int:
         except DesignError as exc:
             raise exc.renamed("--load") from None
     design = _with_compliance(design, args)
-    progress = silent if args.json else StderrProgress()
+    progress = args.progress
     from prs_geom.pipeline import load_models
 
     models = load_models(design, progress=progress)
@@ -311,10 +339,32 @@ def cmd_rating(args: argparse.Namespace) -> int:
                                    execution=studies.Execution(workers=1))
         robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
     rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).report()
+    from prs_geom.analysis.rating import limit_warnings
+
+    failed = limit_warnings(rep["limits"]["checks"])
     if args.json:
         _print_json(rep)
-        return EXIT_OK
-    print(f"design {design.name}: {rep['method']}")
+    else:
+        _print_rating(design.name, rep)
+    # a failed limit is a warning, or with --strict an error (exit 1); stdout stays the report
+    for msg in failed:
+        print(f"{'error' if args.strict else 'warning'}: {msg}", file=sys.stderr)
+    return EXIT_FOUND if failed and args.strict else EXIT_OK
+
+
+def _table(rows: list[list[str]], min_widths: Sequence[int]) -> list[str]:
+    """Lines of a text table: the first column left-aligned, the others right-aligned; each
+    column is its minimum width, widened so that at least two spaces always separate it from
+    the next (no two columns ever touch, whatever the numbers: issue 28)."""
+    widths = [max(w, max(len(r[i]) for r in rows) + 2) for i, w in enumerate(min_widths)]
+    return ["".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
+            for r in rows]
+
+
+def _print_rating(name: str, rep: dict) -> None:
+    """The text output of ``prs-geom rating``: ratings and duty, the lives of the pitch
+    variants, the limit checks with PASS/FAIL, efficiency and stiffness."""
+    print(f"design {name}: {rep['method']}")
     print(f"C_a {rep['dynamic_load_rating_n']:.0f} N, C_0a {rep['static_load_rating_n']:.0f} N; duty "
           f"({rep['duty_source']}): F_m {rep['equivalent_load_n']:.6g} N at n_m {rep['equivalent_speed_rpm']:.6g} rpm, "
           f"f_w {rep['operating_factor']:g}, reliability {rep['reliability_pct']:g} % (a_1 "
@@ -322,10 +372,11 @@ def cmd_rating(args: argparse.Namespace) -> int:
     print(f"catalogue life {rep['l10_revolutions']:.4g} revolutions = {rep['l10_hours']:.5g} h; required C_a for "
           f"{rep['target_life_hours']:g} h: {rep['required_dynamic_load_n']:.0f} N; static safety "
           f"{rep['static_safety']:.3g}")
-    print(f"{'life from the tooth loads':<28}{'L (h)':>12}{'x constant':>12}{'p_max MPa':>11}{'s0':>8}")
+    rows = [["life from the tooth loads", "L (h)", "x constant", "p_max MPa", "s0"]]
     for k, v in rep["distribution_life"].items():
-        print(f"  {k:<26}{v['l10_hours']:12.5g}{v['gain_factor_over_constant_pitch']:12.4f}"
-              f"{v['max_hertz_pressure_mpa']:11.0f}{v['static_safety']:8.3g}")
+        rows.append([f"  {k}", f"{v['l10_hours']:.5g}", f"{v['gain_factor_over_constant_pitch']:.4f}",
+                     f"{v['max_hertz_pressure_mpa']:.0f}", f"{v['static_safety']:.3g}"])
+    print("\n".join(_table(rows, (28, 12, 12, 11, 8))))
     if isinstance(rep["robust"], str):
         print(f"  robust pitch: {rep['robust']}")
     lim, eff, dn = rep["limits"], rep["efficiency"], rep["double_nut"]
@@ -333,13 +384,21 @@ def cmd_rating(args: argparse.Namespace) -> int:
           f"{lim['unsupported_length_mm']:g} mm), d n limit {lim['dn_speed_limit_rpm']:.5g} rpm, permissible "
           f"{lim['permissible_speed_rpm']:.5g} rpm; Euler buckling {lim['buckling_load_n']:.5g} N "
           f"({lim['buckling_ends']}), permissible {lim['permissible_buckling_load_n']:.5g} N")
+    titles = {"speed": "speed", "dn": "d n", "critical_speed": "critical speed", "buckling": "buckling",
+              "static_safety": "static safety s0"}
+    rows = [["limit check", "value", "limit", "unit", "margin", "result"]]
+    for c in lim["checks"]:
+        rows.append([f"  {titles.get(c['name'], c['name'])} ({'max' if c['kind'] == 'upper' else 'min'})",
+                     f"{c['value']:.6g}", f"{c['limit']:.6g}", c["unit"], f"{c['margin']:+.3g}",
+                     "PASS" if c["passed"] else "FAIL"])
+    print("\n".join(_table(rows, (28, 12, 12, 8, 9, 8))))
+    print("  margin = limit / value - 1 (max), value / limit - 1 (min); >= 0 passes")
     print(f"efficiency {eff['forward']:.3f} forward, {eff['back_driving']:.3f} back-driving (mu "
           f"{eff['friction_coefficient']:g}); drive torque {eff['drive_torque_nm']:.4g} N m, holding torque "
           f"{eff['holding_torque_nm']:.4g} N m at {eff['torque_load_n']:g} N")
     st = rep["stiffness"]
     print(f"stiffness {st['secant_n_per_um'][0]:.0f} ... {st['secant_n_per_um'][-1]:.0f} N/um (secant); double nut "
           f"preload {dn['preload_n']:.0f} N, lost at {dn['lift_off_load_n']:.0f} N")
-    return EXIT_OK
 
 
 def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
@@ -394,7 +453,7 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
     design = _with_compliance(design, args)
     from prs_geom.pipeline import load_models
 
-    model = load_models(design, progress=StderrProgress()).model
+    model = load_models(design, progress=args.progress).model
     pd = design_pitches(design, t_nr, t_rs, model=model)
     new = with_pitch_lists(design, pd, name=args.name or f"{design.name}-graded")
     check = forward(new, model=model)
@@ -424,11 +483,15 @@ def _execution(args: argparse.Namespace, quiet: bool):
     if args.dask_workers is not None and args.dask_workers < 1:
         raise DesignError("--dask-workers", args.dask_workers, "must be >= 1")
     try:   # validate the combination up front, under the flags' own names
-        resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
+        backend = resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
     except DesignError as exc:
         raise exc.renamed("--" + exc.field.replace("_", "-")) from None
+    if backend.kind == "dask":
+        from prs_geom.scaleout import require_dask
+
+        require_dask()   # a missing extra is known before any work (exit 3)
     return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
-                     progress=silent if quiet else StderrProgress())
+                     progress=silent if quiet else args.progress)
 
 
 def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
@@ -508,6 +571,18 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         return EXIT_OK if res.feasible else EXIT_FOUND
     if args.out:
         raise UsageError("--out writes synthesised tolerances: give --target-ldc")
+    error_flags = ("flank_um", "roller_diameter_um", "eccentricity_um", "lead_um", "temperature_k")
+    if all(getattr(args, f, None) is None for f in error_flags):
+        # no [tolerances] and no error flag: a study of zero errors says nothing; the library's
+        # rule names the design field, the command line adds its flags
+        try:
+            studies.require_error_model(design)
+        except DesignError:
+            raise UsageError(
+                "no error model: the design has no [tolerances] section and no error flag was given (a study "
+                "of zero errors only repeats the loads). Give the design a [tolerances] section (e.g. flank_um "
+                "= 0.5; docs/theory/tolerances.md) or the errors on the command line: "
+                + ", ".join("--" + f.replace("_", "-") + " T" for f in error_flags)) from None
     study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence,
                                     model=_design_model(design))
     if args.json:
@@ -574,7 +649,7 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
     design = _with_compliance(design, args)
     from prs_geom.pipeline import load_models
 
-    model = load_models(design, progress=silent if args.json else StderrProgress()).model
+    model = load_models(design, progress=args.progress).model
     res = studies.robust_pitch(design, spectrum, tols, quantile=quantile, samples=samples, seed=tols.seed, model=model,
                                execution=_execution(args, quiet=args.json),
                                name=args.name or f"{design.name}-robust")
@@ -605,7 +680,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     _warn(design)
     if args.out:
         check_output_file(args.out, args.force)        # refuse before the work
-    return sweep.run(args, design, progress=silent if args.quiet or args.json else StderrProgress(),
+    return sweep.run(args, design, progress=args.progress,
                      write_out=lambda text: _write_out_file(args.out, text, args.force))
 
 
@@ -671,11 +746,14 @@ def make_parser() -> argparse.ArgumentParser:
                                    "estimated mesh size and memory of a build. Writes nothing.")
     p.add_argument("design", nargs="?", metavar="DESIGN",
                    help="design file (.toml or .json); the built-in default design if omitted")
+    p.add_argument("--memory-budget", metavar="SIZE",
+                   help=f"check the estimate against this budget as build does, e.g. 8G or 512M "
+                        f"(default: ${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
     p.set_defaults(func=cmd_validate)
 
     def budget_arg(q: argparse.ArgumentParser) -> None:
         q.add_argument("--memory-budget", metavar="SIZE",
-                       help=f"largest estimated peak memory to accept, e.g. 8G or 512M (default: "
+                       help=f"largest estimated peak memory to accept, with a unit K, M or G, e.g. 8G or 512M (default: "
                             f"${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
 
     def design_arg(q: argparse.ArgumentParser) -> None:
@@ -726,6 +804,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--step", action="store_true",
                    help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
                         "pip install \"prs-geom[step]\"; several seconds)")
+    p.add_argument("--force", action="store_true",
+                   help="replace files of an earlier output that were edited since prs-geom wrote them "
+                        "(refused otherwise)")
     compliance_arg(p)
     budget_arg(p)
     p.set_defaults(func=cmd_build)
@@ -776,6 +857,9 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--fw", type=float, metavar="F", help="operating factor f_w, 1 to 5 (default rating.operating_factor)")
     p.add_argument("--reliability", type=float, metavar="PCT", help="reliability of the life, 90 to 99 %% (default 90)")
     p.add_argument("--json", action="store_true", help="print the report.json 'rating' section")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 1 when a limit check fails (speed, d n, critical speed, buckling, static safety); "
+                        "without it a failed check is a warning on stderr and the exit code is 0")
     p.set_defaults(func=cmd_rating)
 
     p = sub.add_parser("design-pitch", help="pitch lists for equal (or target) load sharing",
@@ -846,6 +930,11 @@ def make_parser() -> argparse.ArgumentParser:
                    help="positions a (mm) to tabulate; repeat or list several")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
     p.set_defaults(func=cmd_harmonic)
+    # every command takes --quiet (no progress display; warnings and errors still print)
+    for q in sub.choices.values():
+        if not any("--quiet" in a.option_strings for a in q._actions):
+            q.add_argument("--quiet", action="store_true", help="no progress display (warnings and errors "
+                                                                "still print)")
     return parser
 
 
@@ -867,15 +956,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 0 for --help/--version, 2 for usage errors
         return int(exc.code or 0)
     args.debug = debug
+    # one progress display per command, on stderr (prs_geom.progress); none with --quiet or
+    # --json. It starts with the first stage a command reports, so quick commands show nothing.
+    display = None
+    if not (getattr(args, "quiet", False) or getattr(args, "json", False)):
+        display = ConsoleProgress(default_stage=args.command)
+    args.progress = display if display is not None else silent
 
-    def on_sigterm(signum, frame):
+    def on_signal(signum, frame):
+        # the first SIGINT or SIGTERM stops the command; any later one (a second Ctrl-C, or
+        # the copy a worker forwards when the whole process group got it) must not cut
+        # short the clean-up that kills the workers and removes the temporary output
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
         raise Terminated(signum)
 
-    previous = None
+    previous = {}
     try:
-        previous = signal.signal(signal.SIGTERM, on_sigterm)
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            # a process started with SIGINT ignored (nohup, some test runners) keeps ignoring it
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                previous[sig] = signal.signal(sig, on_signal)
     except ValueError:  # not the main thread: leave signals alone
-        previous = None
+        previous = {}
 
     def fail(code: int, message: str) -> int:
         if debug:
@@ -886,16 +991,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DesignWarning)
-            return args.func(args)
+            try:
+                code = args.func(args)
+            except BaseException:
+                if display is not None:
+                    display.close(success=False)
+                raise
+            if display is not None:
+                display.close(success=True)
+            return code
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return EXIT_SIGINT
     except Terminated:
         print("interrupted", file=sys.stderr)
         return EXIT_SIGTERM
-    except (DesignError, UsageError, OutputRefused, ResourceLimitError) as exc:
+    except (DesignError, UsageError, OutputRefused) as exc:
         return fail(EXIT_INPUT, str(exc))
-    except EnvironmentFailure as exc:
+    except (EnvironmentFailure, ResourceLimitError) as exc:
         return fail(EXIT_ENVIRONMENT, str(exc))
     except OSError as exc:
         return fail(EXIT_ENVIRONMENT, _one_line(exc))
@@ -908,8 +1021,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(EXIT_INTERNAL, f"internal error {type(exc).__name__}: {exc} (run with --debug for "
                                    f"the traceback and please report it)")
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def entry_point() -> None:

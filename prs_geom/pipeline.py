@@ -34,7 +34,7 @@ from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
 from prs_geom.model.io import PRS_KINDS, design_hash, design_to_dict, dumps_toml, load_design
-from prs_geom.progress import ProgressFn, silent
+from prs_geom.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
 if TYPE_CHECKING:  # pragma: no cover
     import trimesh
@@ -46,6 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.assembly import Assembly
     from prs_geom.background import Background, Job
     from prs_geom.fe_cache import CachedInfluence
+    from prs_geom.mesh.budget import Estimate
 
 REPORT_NAME = "report.json"
 #: Version of the report.json layout (``format_version``); the JSON Schema
@@ -174,6 +175,15 @@ class _Pending:
     job: str
 
 
+#: what the console calls a stage's background job, where the stage name alone would mislead
+_JOB_LABELS = {"meshes": "mesh checks", "manufacturing": "drawings", "loads": "load plots",
+               "rating": "rating plots", "tolerance": "tolerance plots"}
+
+
+def _job_label(stage: str) -> str:
+    return _JOB_LABELS.get(stage, stage)
+
+
 @dataclass
 class BuildContext:
     """What stages share: the design, the temporary output folder, the report being
@@ -219,7 +229,9 @@ class BuildContext:
         bg = self.background if self.background is not None else Background(0)
         if progress and not bg.workers:
             kwargs["progress"] = self.progress
-        self.jobs[stage] = bg.submit(fn, *args, **kwargs)
+        job = self.jobs[stage] = bg.submit(fn, *args, report_progress=progress and bg.workers > 0, **kwargs)
+        if job.in_worker:
+            watch_job(self.progress, _job_label(stage), job.poll)
 
     def take(self, stage: str) -> Any:
         """The result of the background work of ``stage`` (waits for it). Its time is booked
@@ -228,6 +240,8 @@ class BuildContext:
         t0 = time.perf_counter()
         value = job.result()
         waited = time.perf_counter() - t0
+        if job.in_worker:   # fixed at submission, so still true once the result is taken
+            unwatch_job(self.progress, _job_label(stage), job.seconds)
         self.worker_seconds[stage] = self.worker_seconds.get(stage, 0.0) + job.seconds
         self.waited[self.current_stage] = self.waited.get(self.current_stage, 0.0) + waited
         return value
@@ -294,7 +308,8 @@ def stage_contact(ctx: BuildContext) -> None:
     if ctx.runs("manufacturing"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
-        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__)
+        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__,
+                   progress=True)
 
 
 def stage_gears(ctx: BuildContext) -> None:
@@ -379,8 +394,12 @@ def stage_tolerance(ctx: BuildContext) -> None:
     from prs_geom.exports.plots import plot_tolerance
     from prs_geom.studies import Execution, tolerance_study
 
+    # the build's own worker count: the study shares the build's pool (a pool of another size
+    # would be resized under the build's running jobs) and its memory plan (plan_build); the
+    # numbers are the same on any number of workers (prs_geom.scaleout)
+    workers = ctx.background.workers if ctx.background is not None else 0
     ctx.tolerance = study = tolerance_study(d, contact=ctx.contact, model=ctx.loads.model,
-                                            execution=Execution(workers=None, progress=ctx.progress))
+                                            execution=Execution(workers=max(workers, 1), progress=ctx.progress))
     ctx.report["tolerance"] = study.section
     per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
     ctx.add_plot("tolerance", plot_tolerance, ctx.out, d.name, study.worst,
@@ -561,7 +580,8 @@ def stage_html(ctx: BuildContext) -> None:
                tolerance=ctx.report.get("tolerance"),
                mesh_checks=ctx.meshes.checks if ctx.meshes else None,
                checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date(),
-               mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"))
+               mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"),
+               gears=ctx.report.get("gears"))
 
 
 #: Stages in run order: (report name, function).
@@ -634,10 +654,11 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
                            options=options or BuildOptions(), background=background, stages=list(stages))
         for name, fn in stages:
             ctx.current_stage = name
+            begin_stage(progress, name)
             t0 = time.perf_counter()
             fn(ctx)
             ctx.report["timings_s"][name] = time.perf_counter() - t0
-            progress(name, 1, 1)
+            end_stage(progress, name)
         ctx.current_stage = "end"
         ctx.collect_plots()
         for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
@@ -700,8 +721,37 @@ def _environment_failure(exc: OSError, atomic: AtomicOutputDir) -> EnvironmentFa
                               f"{atomic.given} is as it was)")
 
 
+def plan_build(design: PRSDesign, memory_budget: int | None = None) -> "tuple[int, Estimate]":
+    """Worker processes and the memory estimate of building ``design``: the one estimate
+    that ``build`` applies and ``validate`` prints.
+
+    The default worker count (:func:`prs_geom.background.default_workers`), none for a
+    design checked in axial windows, and none when the design fits ``memory_budget``
+    (bytes; None: the default budget) only serially, because the workers' peaks add to the
+    main process's. Raises :class:`~prs_geom.mesh.budget.ResourceLimitError` when it fits
+    neither way.
+    """
+    from prs_geom.background import default_workers
+    from prs_geom.mesh.budget import ResourceLimitError, check_windows, guard
+
+    workers = default_workers()
+    if check_windows(design) is not None:
+        # a long design's check runs window by window to bound memory; beside the export
+        # meshing in a worker its peak would add to the main process's again
+        workers = 0
+    try:
+        return workers, guard(design, memory_budget, workers=workers)
+    except ResourceLimitError:
+        if not workers:
+            raise
+        # a design too large for parallel peaks runs serially (one peak at a time) when it
+        # fits so, and is refused only when not
+        return 0, guard(design, memory_budget, workers=0)
+
+
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
-          memory_budget: int | None = None, options: BuildOptions | None = None) -> dict[str, Any]:
+          memory_budget: int | None = None, options: BuildOptions | None = None, *, force: bool = False,
+          source: str | Path | None = None) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``: what
     ``prs-geom build`` does.
 
@@ -711,31 +761,20 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     front when its estimated memory exceeds ``memory_budget`` (bytes; default a share of the
     available memory, :mod:`prs_geom.mesh.budget`); a job that fits the budget only without
     worker processes runs without them. ``options``: :class:`BuildOptions`. Written atomically: if any stage fails,
-    ``out_dir`` keeps its previous content. Returns the report dict.
+    ``out_dir`` keeps its previous content. ``force`` replaces files of an earlier output
+    that were edited since prs-geom wrote them (refused otherwise); ``source``, the design
+    file the design was read from: when it lies inside ``out_dir`` it is kept byte for
+    byte. Returns the report dict.
     """
-    from prs_geom.mesh.budget import guard
-
     harmonic = isinstance(design, HarmonicDesign)
-    atomic = AtomicOutputDir(out_dir, {"design": design.name})
+    atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
     workers = None
     if not harmonic:
-        from prs_geom.background import default_workers
-        from prs_geom.mesh.budget import ResourceLimitError, check_windows
+        if options is not None and options.step:
+            from prs_geom.exports.step import require_ocp
 
-        workers = default_workers()
-        if check_windows(design) is not None:
-            # a long design's check runs window by window to bound memory; beside the export
-            # meshing in a worker its peak would add to the main process's again
-            workers = 0
-        try:
-            guard(design, memory_budget, workers=workers)
-        except ResourceLimitError:
-            if not workers:
-                raise
-            # the workers' peaks add to the main process's: a design too large for that runs
-            # serially (one peak at a time) when it fits so, and is refused only when not
-            guard(design, memory_budget, workers=0)
-            workers = 0
+            require_ocp()   # a missing extra is known now, not after the meshing
+        workers, _ = plan_build(design, memory_budget)
     try:
         with atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,

@@ -21,8 +21,9 @@ Dask is an optional extra (``pip install "prs-geom[dask]"``), imported only when
 backend is asked for; without it :class:`~prs_geom.model.errors.EnvironmentFailure` names
 the install command (exit code 3 on the command line).
 
-Leaf-ish module: it imports nothing of prs_geom but :mod:`prs_geom.progress` and
-:mod:`prs_geom.model.errors`, so any layer may use it. numpy, joblib, threadpoolctl and Dask
+Leaf-ish module: it imports nothing of prs_geom but :mod:`prs_geom.progress`,
+:mod:`prs_geom.background` (the worker pool) and :mod:`prs_geom.model.errors`, so any layer
+may use it. numpy, joblib, threadpoolctl and Dask
 are imported on use, which keeps the command-line start-up light.
 """
 from __future__ import annotations
@@ -40,7 +41,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
 
 __all__ = ["DASK_INSTALL", "Backend", "available_cpus", "plan_chunks", "spawn_seeds", "resolve_backend",
-           "run_chunks", "local_cluster_options"]
+           "run_chunks", "local_cluster_options", "require_dask"]
 
 P = TypeVar("P")
 R = TypeVar("R")
@@ -223,8 +224,8 @@ def run_chunks(task: Callable[[P], R], payloads: Sequence[P], *, workers: int | 
     ----------
     task : callable
         ``task(payload) -> result``: a top-level (importable, picklable) function, or a
-        ``functools.partial`` of one. It must not modify its payload (joblib hands large
-        arrays to the workers as read-only memory maps) and runs with one BLAS thread.
+        ``functools.partial`` of one. It must not modify its payload (in this process it
+        is the caller's object) and runs with one BLAS thread.
     payloads : sequence
         One picklable payload per chunk, e.g. ``(seed_sequence, item_range, model)``.
     workers : int, optional
@@ -294,16 +295,17 @@ def run_chunks(task: Callable[[P], R], payloads: Sequence[P], *, workers: int | 
 
 def _run_joblib(task: Callable[[Any], Any], payloads: list[Any], n_jobs: int,
                 tick: Callable[[int], None]) -> list[Any]:
-    from joblib import Parallel, delayed
+    """The chunks in the build's worker pool (:mod:`prs_geom.background`: joblib's loky
+    processes, which do not re-run the caller's script, killed on an error or interrupt)."""
+    from prs_geom.background import Background
 
-    # batch_size=1: a chunk is already a sizeable piece of work, and one chunk per dispatch
-    # keeps the progress steps the caller's chunks. The ordered generator yields in payload
-    # order, so the results need no sorting.
-    parallel = Parallel(n_jobs=n_jobs, backend="loky", return_as="generator", batch_size=1)
-    out = []
-    for i, result in enumerate(parallel(delayed(_pinned_call)(task, p) for p in payloads)):
-        out.append(result)
-        tick(i)
+    with Background(n_jobs) as pool:
+        jobs = [pool.submit(_pinned_call, task, p) for p in payloads]
+        out = []
+        # taken in payload order, so the results need no sorting
+        for i, job in enumerate(jobs):
+            out.append(job.result())
+            tick(i)
     return out
 
 
@@ -315,6 +317,12 @@ def local_cluster_options(n_workers: int) -> dict[str, Any]:
     cluster on the machine."""
     return {"n_workers": n_workers, "threads_per_worker": 1, "processes": True, "dashboard_address": ":0",
             "silence_logs": logging.ERROR}
+
+
+def require_dask() -> None:
+    """Raise :class:`EnvironmentFailure` naming the install command when the Dask extra is
+    missing: for the command line to check before any work starts."""
+    _import_distributed()
 
 
 def _import_distributed() -> Any:

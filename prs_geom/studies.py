@@ -104,6 +104,28 @@ def _context(design: PRSDesign, contact: ContactResult | None, model: LoadModel 
     return contact, model
 
 
+#: What to write when a study has no error model (the design field, not a CLI flag: the
+#: command line maps it to its own flags).
+NO_ERROR_MODEL = ("the design has no error model: add a [tolerances] section with at least one tolerance "
+                  "(e.g. tolerances.flank_um = 0.5; docs/theory/tolerances.md); a Monte Carlo study of zero "
+                  "errors would only repeat the loads")
+
+
+def require_error_model(design: PRSDesign, tolerances: Tolerances | None = None) -> Tolerances:
+    """The error model of a study: ``tolerances``, else the design's ``[tolerances]``.
+
+    Raises
+    ------
+    DesignError
+        On field ``tolerances`` when neither is given. (An explicit model whose terms are
+        all 0 is accepted: asked for on purpose, it reproduces the deterministic loads.)
+    """
+    tolerances = tolerances or design.tolerances
+    if tolerances is None:
+        raise DesignError("tolerances", None, NO_ERROR_MODEL)
+    return tolerances
+
+
 def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                     contact: ContactResult | None = None, model: LoadModel | None = None,
                     execution: Execution = Execution(), importance: bool = True,
@@ -111,9 +133,7 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
     """Monte Carlo study of ``design`` under ``tolerances`` (default: the design's
     ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
     fractions (or at ``loads_n``, N), all z rollers side by side."""
-    tolerances = tolerances or design.tolerances
-    if tolerances is None:
-        raise DesignError("tolerances", None, "the design has no [tolerances] section and none was given")
+    tolerances = require_error_model(design, tolerances)
     if confidence is not None and not 0.0 < confidence < 1.0:
         raise DesignError("--confidence", confidence, "must be in (0, 1)")
     contact, model = _context(design, contact, model)
@@ -270,7 +290,10 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
         T = units * TOLERANCE_STEP_UM
         per = {k: (np.full(n, T) if w is None else _round_down(w[k] * T)) for k in FLANK_FIELDS}
         prob = replace(problem0, errors=model_for(per))
-        k, _ = _success(prob, samples, seed, execution, target_ldc, "synthesis")
+        # the trial tolerance in the stage name: each trial's sample count restarts, and a
+        # log should say which tolerance a count belongs to
+        label = f"synthesis, {'uniform' if w is None else 'allocated'} flank tolerance {T:.2f} µm, samples"
+        k, _ = _success(prob, samples, seed, execution, target_ldc, label)
         return tol.clopper_pearson_lower(k, samples, CP_LEVEL) >= confidence, k
 
     capped: list[bool] = []

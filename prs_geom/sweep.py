@@ -4,9 +4,12 @@
 roller count, pitch, engaged teeth and, optionally, fractions of the design load, each
 applied to a base design, and tabulates per point (docs/scaleout.md "Design-space sweeps"):
 
-* whether the point is a valid design, else the :class:`~prs_geom.model.errors.DesignError`
-  message the model raised (a point outside the model's rules does not stop the sweep) and
-  the standard-sizing relations it breaks (warnings, not errors, as in ``validate``);
+* whether the point is a valid design (status ``ok``), a valid design with warnings
+  (``warnings``: it breaks a standard-sizing relation, a plausible range or lets the rollers
+  drift axially, the warnings of ``prs-geom validate``, listed in their own columns), or
+  not (``invalid``, with the :class:`~prs_geom.model.errors.DesignError` message the model
+  raised; a point outside the model's rules does not stop the sweep); ``failed`` when a
+  solver did not converge;
 * the worst load-distribution coefficient (both sides) of the constant-pitch design at the
   point's design load;
 * the worst coefficient of the equal-load graded design (:func:`~prs_geom.analysis.loads.design_pitches`
@@ -58,8 +61,9 @@ CHUNK_POINTS = 4
 #: A sweep of fewer points runs in this process unless workers are asked for: starting worker
 #: processes (about a second, each imports numpy, scipy and prs_geom) costs more than it saves.
 SERIAL_BELOW = 16
-#: Status of a row.
-OK, INVALID, FAILED = "ok", "invalid", "failed"
+#: Status of a row: valid, valid with warnings (the warnings of ``validate``), invalid, failed.
+OK, WARNINGS, INVALID, FAILED = "ok", "warnings", "invalid", "failed"
+STATUSES = (OK, WARNINGS, INVALID, FAILED)
 
 
 @dataclass(frozen=True)
@@ -81,9 +85,12 @@ _POINT_COLUMNS = (
     Column("engaged_teeth", "-", "engaged teeth n"),
     Column("load_fraction", "-", "design load of the point as a fraction of the base design load"),
     Column("design_load_N", "N", "design load F0 of the point"),
-    Column("status", "-", "ok; invalid (the design breaks a rule of the model); failed (a solver did not converge)"),
+    Column("status", "-", "ok (valid); warnings (valid, with the warnings of the next two columns); invalid (the "
+                          "design breaks a rule of the model); failed (a solver did not converge)"),
     Column("reason", "-", "the error message of an invalid or failed point, else empty"),
     Column("sizing_warnings", "-", "standard-sizing relations the point breaks, separated by ' | '"),
+    Column("plausibility_warnings", "-", "values outside their plausible range and axial roller drift (the "
+                                         "other warnings of prs-geom validate), separated by ' | '"),
     Column("constant_max_ldc", "-", "worst load-distribution coefficient, both sides, constant pitch, at F0"),
 )
 _TAIL_COLUMNS = (
@@ -151,14 +158,25 @@ class SweepResult:
         return [dict(zip(names, row)) for row in self.table]
 
     def count(self, status: str = OK) -> int:
-        """Number of rows with this status (``"ok"``, ``"invalid"`` or ``"failed"``)."""
+        """Number of rows with this status (``"ok"``, ``"warnings"``, ``"invalid"`` or ``"failed"``)."""
         i = [c.name for c in self.columns].index("status")
         return sum(1 for row in self.table if row[i] == status)
 
+    def counts(self) -> dict[str, int]:
+        """Rows per status, every status of :data:`STATUSES` (0 included)."""
+        return {s: self.count(s) for s in STATUSES}
+
+    def summary(self) -> str:
+        """``"N points, a valid, b valid with warnings, c invalid, d failed"``."""
+        c = self.counts()
+        return (f"{len(self.table)} points, {c[OK]} valid, {c[WARNINGS]} valid with warnings, {c[INVALID]} invalid, "
+                f"{c[FAILED]} failed")
+
     def to_json(self) -> dict[str, Any]:
-        """A JSON-ready dict: design, columns (name, unit, description) and rows (null where
-        a point has no number)."""
+        """A JSON-ready dict: design, the row count per status, columns (name, unit,
+        description) and rows (null where a point has no number)."""
         return {"design": self.design_name, "base_load_N": self.base_load_n, "fractions": list(self.fractions),
+                "counts": self.counts(),
                 "columns": [{"name": c.name, "unit": c.unit, "description": c.description} for c in self.columns],
                 "rows": self.rows()}
 
@@ -251,15 +269,20 @@ def _row(base: PRSDesign, point: SweepPoint, fractions: tuple[float, ...]) -> tu
                   engaged_teeth=point.teeth, load_fraction=point.load_fraction,
                   screw_starts=base.screw.starts if point.starts is None else point.starts,
                   nut_starts=base.nut.starts if point.starts is None else point.starts,
-                  design_load_N=base.loading.axial_load_n * point.load_fraction, reason="", sizing_warnings="")
+                  design_load_N=base.loading.axial_load_n * point.load_fraction, reason="", sizing_warnings="",
+                  plausibility_warnings="")
     try:
+        from prs_geom.model.plausibility import design_warnings
+
         design = point_design(base, point)
-        values["sizing_warnings"] = " | ".join(design.sizing_warnings())
+        sizing, other = design.sizing_warnings(), design_warnings(design)
+        values["sizing_warnings"] = " | ".join(sizing)
+        values["plausibility_warnings"] = " | ".join(other)
         with warnings.catch_warnings():
             # the sizing relations are in their own column already
             warnings.simplefilter("ignore", DesignWarning)
             values.update(evaluate_point(design, fractions))
-        values["status"] = OK
+        values["status"] = WARNINGS if sizing or other else OK
     except DesignError as exc:
         values["status"], values["reason"] = INVALID, str(exc)
     except PRSGeomError as exc:   # a solver that did not converge: that point only
@@ -404,34 +427,37 @@ def _cell(value: Any, fmt: str) -> str:
 
 
 def print_table(result: SweepResult, file: Any = None) -> None:
-    """The sweep as a fixed-width table: invalid and failed points with their reason, the
-    standard-sizing relations a point breaks counted in column ``sz`` and listed below."""
+    """The sweep as a fixed-width table: invalid and failed points with their reason; the
+    warnings of a valid point (standard sizing, plausible ranges, roller drift) counted in
+    column ``w`` and listed below with the points that draw them."""
     file = file or sys.stdout
     rows = result.rows()
-    print(f"design {result.design_name}: {len(rows)} points, {result.count(OK)} valid. Worst LDC of both "
+    print(f"design {result.design_name}: {result.summary()}. Worst LDC of both "
           f"sides at constant pitch (const.) and of the equal-load graded design (gr.) at % of the point's "
           f"design load = load x {result.base_load_n:g} N", file=file)
     pcts = [f"{f * 100:g}%" for f in result.fractions]
-    print(f"{'pt':>4} {'starts':>6} {'rollers':>7} {'p mm':>6} {'teeth':>5} {'load':>5} {'sz':>2} {'const.':>7} "
+    print(f"{'pt':>4} {'starts':>6} {'rollers':>7} {'p mm':>6} {'teeth':>5} {'load':>5} {'w':>2} {'const.':>7} "
           + " ".join(f"{'gr.' + p:>8}" for p in pcts) + f" {'k N/um':>8} {'gr. k':>8} {'corr um':>8}", file=file)
-    broken: dict[str, list[int]] = {}
+    broken: dict[tuple[str, str], list[int]] = {}
     for row in rows:
         starts = str(row["screw_starts"]) if row["screw_starts"] == row["nut_starts"] else \
             f"{row['screw_starts']}/{row['nut_starts']}"
-        sizing = row["sizing_warnings"].split(" | ") if row["sizing_warnings"] else []
-        for msg in sizing:
-            broken.setdefault(msg, []).append(row["point"])
+        sizing = []
+        for kind, col in (("sizing", "sizing_warnings"), ("plausibility", "plausibility_warnings")):
+            for msg in (row[col].split(" | ") if row[col] else []):
+                sizing.append(msg)
+                broken.setdefault((kind, msg), []).append(row["point"])
         line = (f"{row['point']:>4} {starts:>6} {row['rollers']!s:>7} {row['pitch_mm']!s:>6} "
                 f"{row['engaged_teeth']!s:>5} {row['load_fraction']:>5g}")
-        if row["status"] != OK:
+        if row["status"] not in (OK, WARNINGS):
             print(f"{line} {'':>2} {row['status']}: {row['reason']}", file=file)
             continue
         graded = " ".join(f"{row[_fraction_name(f)]:8.4f}" for f in result.fractions)
         print(f"{line} {len(sizing) or '':>2} {_cell(row['constant_max_ldc'], '7.4f')} {graded} "
               f"{_cell(row['constant_stiffness_N_per_um'], '8.1f')} {_cell(row['graded_stiffness_N_per_um'], '8.1f')} "
               f"{_cell(row['max_pitch_correction_um'], '8.3f')}", file=file)
-    for msg, pts in broken.items():
-        print(f"sizing (warning, points {_ranges(pts)}): {msg}", file=file)
+    for (kind, msg), pts in broken.items():
+        print(f"{kind} (warning, points {_ranges(pts)}): {msg}", file=file)
 
 
 def _ranges(numbers_: list[int]) -> str:
@@ -470,5 +496,5 @@ def run(args: argparse.Namespace, design: PRSDesign, *, progress: ProgressFn | N
         print_table(result)
     if args.out:
         write_out(result.csv_text())
-        print(f"wrote {args.out}: {len(result.table)} points, {result.count(OK)} valid", file=sys.stderr)
+        print(f"wrote {args.out}: {result.summary()}", file=sys.stderr)
     return 0

@@ -119,6 +119,7 @@ INVALID = {
     "rating.static_pressure_limit_mpa": out_of(1000.0, 6000.0),
     "rating.preload_n": non_positive,
     "rating.dn_limit_mm_rpm": st.one_of(non_positive, st.floats(1e7, 1e12, exclude_min=True)),
+    "rating.required_static_safety": out_of(1.0, 20.0),
     # the optional [tolerances] section
     "tolerances.distribution": bad_choice(("uniform", "normal")),
     **{f"tolerances.{k}": out_of(0.0, 100.0) for k in ("flank_um", "roller_diameter_um", "screw_eccentricity_um",

@@ -79,3 +79,14 @@ def test_kind_of_the_wrong_type_is_a_field_error():
     for text in ('kind = []\n', 'kind = 3\n', 'kind = {a = 1}\n'):
         with pytest.raises(DesignError, match=r"^kind = .*: must be one of"):
             loads_toml(text)
+
+
+def test_required_static_safety_round_trips_and_defaults():
+    """rating.required_static_safety (issue 28): written, read back in TOML and JSON; a
+    [rating] section without it takes the catalogue default 2."""
+    from prs_geom.model.design import RatingSettings
+
+    d = PRSDesign(rating=RatingSettings(required_static_safety=4.5))
+    assert "required_static_safety = 4.5" in dumps_toml(d)
+    assert loads_toml(dumps_toml(d)) == d and loads_json(dumps_json(d)) == d
+    assert loads_toml("[rating]\nspeed_rpm = 50\n").rating.required_static_safety == 2.0

@@ -399,17 +399,31 @@ def _table_rows(page: str, table_id: str) -> list[list[str]]:
     return [re.findall(r"<td[^>]*>(.*?)</td>", r) for r in re.findall(r"<tr>(.*?)</tr>", body) if "<td" in r]
 
 
+def _table_titles(page: str, table_id: str) -> list[list[str]]:
+    """The exact values of a table's cells: each number's full float64 text is in the
+    ``title`` of its cell (the cell shows it rounded to its quantity's precision)."""
+    body = re.search(rf"<table id='{table_id}'>(.*?)</table>", page, re.S).group(1)
+    return [re.findall(r"<td[^>]*title='([^']*)'[^>]*>", r) for r in re.findall(r"<tr>(.*?)</tr>", body)
+            if "<td" in r]
+
+
 def test_report_html_holds_the_ratio_table_at_full_precision_and_is_self_contained(placed):
     d, out, report = placed
     page = (out / "report.html").read_text(encoding="utf-8")
     ref = harmonic_report(d)
     keys = ["a_mm", "beta_deg", "phi_deg", "contact_radius_mm", "cone_radius_mm", "radius_difference_mm", "ratio"]
-    rows = _table_rows(page, "ratio-table")
+    rows = _table_titles(page, "ratio-table")
+    shown = _table_rows(page, "ratio-table")
     assert len(rows) == len(ref["table"]) == 65
-    for cells, row in zip(rows, ref["table"]):
-        assert [float(c) for c in cells] == [row[k] for k in keys]          # exact: shortest repr
+    for cells, text, row in zip(rows, shown, ref["table"]):
+        assert [float(c) for c in cells] == [row[k] for k in keys]          # exact: shortest repr in the tooltip
+        # shown to the precision of the quantity: 4 decimals for mm and degrees, 4 digits for the ratio
+        assert [float(t) for t in text[:6]] == [round(row[k], 4) for k in keys[:6]]
+        assert float(text[6]) == pytest.approx(row["ratio"], rel=5e-4)
     speed = {c[0]: float(c[1]) for c in _table_rows(page, "speed-range")}
-    assert speed["speed range"] == ref["speed_range"] and speed["ratio at positions.max_mm"] == ref["ratio_max"]
+    exact = {c[0]: float(t[0]) for c, t in zip(_table_rows(page, "speed-range"), _table_titles(page, "speed-range"))}
+    assert exact["speed range"] == ref["speed_range"] and exact["ratio at positions.max_mm"] == ref["ratio_max"]
+    assert speed["speed range"] == pytest.approx(ref["speed_range"], rel=5e-4)
     assert design_hash(d) in page and __version__ in page
     assert not re.search(r"""(src|href)\s*=\s*["'](https?:|//|/|\.\.?/)""", page)
     assert "<link" not in page and "@import" not in page and "<script src" not in page

@@ -30,8 +30,9 @@ def test_grinding_only_removes_material_and_lands_on_design():
         t = float(getattr(ThreadProfiles.from_design(d), part).tooth_half_width(
             getattr(ThreadProfiles.from_design(d), part).pitch_radius))
         stock = sh.header["base_tooth_thickness_stock_um"] * 1e-3
-        assert sh.header["base_pitch_mm"] == pl.min()
-        assert stock == pytest.approx(np.sum(pl - pl.min()), abs=1e-15)
+        # every length rounded to 1e-9 mm (um: 1e-6 um): the sheet states the numbers to 1 pm
+        assert sh.header["base_pitch_mm"] == round(pl.min(), 9)
+        assert stock == pytest.approx(np.sum(pl - pl.min()), abs=5e-10)
         for row in sh.rows:
             j = row["tooth"] - 1
             side = -1 if row["flank"] == "lower" else 1
@@ -45,13 +46,17 @@ def test_grinding_only_removes_material_and_lands_on_design():
             designed_flank = mid1 + np.sum(pl[:j]) + side * t
             base_flank = mid1 + j * pl.min() + 0.5 * stock + side * (t + 0.5 * stock)
             assert row["on_part"] == (0 <= designed_flank <= d.thread.engaged_teeth * d.thread.pitch_mm)
-            assert row["designed_position_mm"] == pytest.approx(designed_flank, abs=1e-12)
-            assert row["base_position_mm"] == pytest.approx(base_flank, abs=1e-12)
-            # the sheet identity a shop checks, on the numbers as written
+            assert row["designed_position_mm"] == pytest.approx(designed_flank, abs=5e-10 + 1e-13)
+            # (base_flank reads the rounded stock: one more rounding in the reference)
+            assert row["base_position_mm"] == pytest.approx(base_flank, abs=1e-9)
+            # the sheet identity a shop checks, on the numbers as written: exact at the
+            # stated rounding, and to float precision
+            assert round(row["base_position_mm"] + row["axial_shift_um"] / 1000, 9) == row["designed_position_mm"]
             assert abs(row["base_position_mm"] + row["axial_shift_um"] / 1000 - row["designed_position_mm"]) < 1e-12
             assert row["inspection_position_mm"] == row["designed_position_mm"]
-            assert row["lead_deviation_um"] == pytest.approx((np.sum(pl[:j]) - j * d.thread.pitch_mm) * 1e3, abs=1e-9)
-            assert row["base_tooth_thickness_mm"] - row["tooth_thickness_mm"] == pytest.approx(stock, abs=1e-12)
+            assert row["lead_deviation_um"] == pytest.approx((np.sum(pl[:j]) - j * d.thread.pitch_mm) * 1e3,
+                                                             abs=5e-7 + 1e-12)
+            assert row["base_tooth_thickness_mm"] - row["tooth_thickness_mm"] == pytest.approx(stock, abs=1.5e-9)
             assert row["tolerance_um"] is None
         assert "not synthesised" in sh.header["tolerance"]
         # datums: tooth 1 lower and tooth n upper flanks are not worked
@@ -128,10 +133,10 @@ def test_tolerances_of_the_design_reach_the_sheet():
     for row in sheets["roller"].rows:
         j = row["tooth"] - 1
         want = tol.roller_screw_flank_um[j] if row["flank"] == "upper" else tol.roller_nut_flank_um[j]
-        assert row["tolerance_um"] == want
+        assert row["tolerance_um"] == round(want, 6)          # 0.31, not 0.31000000000000005
     for row in sheets["nut"].rows:
         j = row["tooth"] - 1
-        assert row["tolerance_um"] == (tol.nut_flank_um[j] if row["flank"] == "upper" else None)
+        assert row["tolerance_um"] == (round(tol.nut_flank_um[j], 6) if row["flank"] == "upper" else None)
     h = sheets["nut"].header["tolerance"]
     assert "synthesised by a test" in h and "1.2" in h and "0.95" in h
 
@@ -200,13 +205,14 @@ def test_start_table_of_the_multi_start_nut():
     pl = np.array(d.pitch_list("nut"))
     starts = sheets["nut"].starts
     assert [s["start"] for s in starts] == list(range(1, N + 1))
-    assert [s["angular_index_deg"] for s in starts] == [360.0 * k / N for k in range(N)]
+    assert [s["angular_index_deg"] for s in starts] == [round(360.0 * k / N, 9) for k in range(N)]
     for k, s in enumerate(starts):
         assert s["teeth_at_theta_0"][:2] == [k + 1, k + 1 + N]
-        assert s["axial_offset_mm"] == pytest.approx(np.sum(pl[:k]), abs=1e-15)
+        # lengths to 1e-9 mm (issue 28): the rounded exact value
+        assert s["axial_offset_mm"] == pytest.approx(np.sum(pl[:k]), abs=5e-10 + 1e-15)
         leads = [np.sum(pl[j - 1:j - 1 + N]) for j in s["teeth_at_theta_0"] if j - 1 + N <= len(pl)]
-        assert s["lead_min_mm"] == pytest.approx(min(leads), abs=1e-14)
-        assert s["lead_max_mm"] == pytest.approx(max(leads), abs=1e-14)
+        assert s["lead_min_mm"] == pytest.approx(min(leads), abs=5e-10 + 1e-14)
+        assert s["lead_max_mm"] == pytest.approx(max(leads), abs=5e-10 + 1e-14)
         assert s["nominal_lead_mm"] == N * d.thread.pitch_mm
     assert sorted(t for s in starts for t in s["teeth_at_theta_0"]) == list(range(1, d.thread.engaged_teeth + 1))
     assert sheets["roller"].starts[0]["teeth_at_theta_0"] == list(range(1, d.thread.engaged_teeth + 1))
@@ -232,3 +238,64 @@ def test_inspection_csv_reads_back(built):
     assert [r["part"] for r in rows] == ["screw", "roller", "nut"]
     for r in rows:
         assert float(r["measurement_mm"]) == report["inspection"][r["part"]]["measurement_mm"]
+
+
+# --------------------------------------------------------------------------- numbers without float noise (issue 28)
+#: Decimals a sheet number may carry, by unit: mm to 1e-9 mm, um to 1e-6 um (1 pm both).
+DECIMALS = {"mm": 9, "um": 6}
+
+
+def _decimals(text: str) -> int:
+    assert "e" not in text.lower(), text             # positional, never 1e-06
+    return len(text.partition(".")[2])
+
+
+def _assert_clean(rows, float_of=float):
+    """Every numeric cell: at most 9 (mm) or 6 (um) decimals, equal to its own rounding; the
+    shop identity designed = base + shift / 1000 exactly at 1e-9 mm and to 1e-12 mm."""
+    for row in rows:
+        for key, _, unit in COLUMNS:
+            if unit in DECIMALS and row[key] not in ("", None):
+                if isinstance(row[key], str):
+                    assert _decimals(row[key]) <= DECIMALS[unit], (key, row[key])
+                x = float_of(row[key])
+                assert round(x, DECIMALS[unit]) == x, (key, x)
+        d, b, s = (float_of(row[k]) for k in ("designed_position_mm", "base_position_mm", "axial_shift_um"))
+        assert round(b + s / 1000, 9) == d
+        assert abs(b + s / 1000 - d) < 1e-12
+
+
+def test_default_sheet_reads_as_typed():
+    """The constant-pitch default design: roller tooth thickness p/2 = 1 mm, so the flanks of
+    tooth j lie at 2j - 1.5 (lower) and 2j - 0.5 mm (upper) from datum A; the sheet says
+    exactly that (it used to say 1.0000000000000009 and 3.5000000000000004)."""
+    from prs_geom.exports.sheets import sheet_csv
+    from prs_geom.model.design import default_design
+
+    sh = machining_sheets(default_design())["roller"]
+    for row in sh.rows:
+        j = row["tooth"]
+        want = 2 * j - 1.5 if row["flank"] == "lower" else 2 * j - 0.5
+        assert row["designed_position_mm"] == row["base_position_mm"] == want
+        assert row["tooth_thickness_mm"] == 1.0 and row["axial_shift_um"] == 0.0
+    text = sheet_csv(sh)
+    assert "\n2,upper,screw,2.0,2.0,3.5,3.5,0.0,0.0,1.0,1.0,0.0,,no,yes,3.5\n" in text
+    _assert_clean(read_sheet_csv(text)[1])
+
+
+def test_csv_and_xlsx_numbers_carry_no_float_noise(built):
+    d, out, report = built
+    for part in ("roller", "nut"):
+        header, rows = read_sheet_csv((out / f"machining_{part}.csv").read_text())
+        assert len(rows) == 2 * d.thread.engaged_teeth
+        assert any(float(r["axial_shift_um"]) != 0.0 for r in rows)     # a graded part: real shifts
+        _assert_clean(rows)
+        assert _decimals(header["base_tooth_thickness_stock_um"]) <= 6
+        assert _decimals(header["base_pitch_mm"]) <= 9
+        # the sign rule survives the rounding: lower flanks +z, upper -z, datum flanks exactly 0
+        for r in rows:
+            s = float(r["axial_shift_um"])
+            assert s >= 0 if r["flank"] == "lower" else s <= 0
+        assert float(rows[0]["axial_shift_um"]) == 0.0 and float(rows[-1]["axial_shift_um"]) == 0.0
+    for part, rows in read_xlsx(out / "machining.xlsx").items():
+        _assert_clean(rows)

@@ -495,3 +495,91 @@ def test_readme_rating_example_is_what_the_command_prints():
     for line in shown:
         assert line in printed, line
     assert "constant_pitch                  3370.2" in block
+
+
+# --------------------------------------------------------------------------- limit checks (issue 28)
+def _by_hand_limits():
+    """The default design's limits from the formulas of docs/theory/ratings.md (DOMAIN 7), by
+    hand: root d = 24 - 1.6 x 0.5 = 23.2 mm, L = (20 + 4) x 2 = 48 mm, fixed-supported
+    (lambda 3.926602312, k 0.699), E 212000 MPa, rho 7.85e-9 t/mm^3."""
+    d, L, E = 23.2, 48.0, 212_000.0
+    n_cr = 60.0 / (2 * math.pi) * (3.926602312 / L) ** 2 * math.sqrt(E * (math.pi * d ** 4 / 64)
+                                                                     / (7.85e-9 * math.pi * d ** 2 / 4))
+    F_k = math.pi ** 2 * E * (math.pi * d ** 4 / 64) / (0.699 * L) ** 2
+    return {"speed": 150_000.0 / 24.0, "dn": 150_000.0, "critical_speed": 0.8 * n_cr, "buckling": F_k / 2.0,
+            "static_safety": 2.0}
+
+
+def test_limit_checks_of_the_default_design(default_rating):
+    d, *_, res = default_rating
+    lim = res.section["limits"]
+    checks = {c["name"]: c for c in lim["checks"]}
+    assert [c["name"] for c in lim["checks"]] == ["speed", "dn", "critical_speed", "buckling", "static_safety"]
+    hand = _by_hand_limits()
+    for name, limit in hand.items():
+        assert checks[name]["limit"] == pytest.approx(limit, rel=1e-9), name
+    assert checks["speed"]["limit"] == 6250.0 and lim["permissible_speed_rpm"] == 6250.0   # d n governs
+    # the duty: the design load 20 kN at rating.speed_rpm 100 rpm, nominal diameter 24 mm
+    values = {"speed": 100.0, "dn": 2400.0, "critical_speed": 100.0, "buckling": 20_000.0,
+              "static_safety": res.section["static_load_rating_n"] / 20_000.0}
+    units = {"speed": "rpm", "dn": "mm/min", "critical_speed": "rpm", "buckling": "N", "static_safety": "-"}
+    for name, c in checks.items():
+        assert c["value"] == pytest.approx(values[name], rel=1e-12) and c["unit"] == units[name]
+        # upper limits: margin = limit / value - 1; the lower limit s0: value / limit - 1
+        want = values[name] / hand[name] - 1 if name == "static_safety" else hand[name] / values[name] - 1
+        assert c["margin"] == pytest.approx(want, rel=1e-9) and c["passed"] is True
+        assert c["kind"] == ("lower" if name == "static_safety" else "upper")
+    assert checks["speed"]["margin"] == pytest.approx(61.5)          # 6250 / 100 - 1
+    assert checks["static_safety"]["value"] == pytest.approx(94382 / 20_000, rel=1e-4)   # C_0a 94.4 kN (docs)
+    assert lim["required_static_safety"] == 2.0 and lim["all_passed"] is True
+
+
+def test_speed_check_flips_at_the_permissible_speed():
+    d = PRSDesign()
+    c = analyse_contact(d)
+    m = build_model(d, c)
+
+    def speed_check(n):
+        res = R.analyse_rating(d, c, m, R.rating_case(d, speed_rpm=n))
+        return {k["name"]: k for k in res.section["limits"]["checks"]}
+
+    at, above = speed_check(6250.0), speed_check(6250.0 * (1 + 1e-9))
+    assert at["speed"]["passed"] and at["speed"]["margin"] == 0.0 and at["dn"]["passed"]
+    assert not above["speed"]["passed"] and above["speed"]["margin"] < 0 and not above["dn"]["passed"]
+    assert above["critical_speed"]["passed"]             # the whirling limit is 1.5e6 rpm here
+    assert R.limit_warnings(list(above.values())) == [
+        "speed 6250 rpm exceeds the permissible 6250 rpm (the smaller of the d n limit and the critical speed "
+        "limit)",
+        "d n = nominal diameter x speed = 150000 mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
+        "150000 mm/min"]
+
+
+def test_static_safety_and_buckling_fail_under_an_absurd_load(default_rating):
+    d, c, m, res0 = default_rating
+    res = R.analyse_rating(d, c, m, R.rating_case(d, mean_load_n=2e9))
+    checks = {k["name"]: k for k in res.section["limits"]["checks"]}
+    C0a = res0.section["static_load_rating_n"]
+    assert checks["static_safety"]["value"] == pytest.approx(C0a / 2e9, rel=1e-12)
+    assert checks["static_safety"]["value"] == pytest.approx(4.7e-5, rel=0.01)
+    assert not checks["static_safety"]["passed"] and not checks["buckling"]["passed"]
+    assert checks["buckling"]["margin"] == pytest.approx(_by_hand_limits()["buckling"] / 2e9 - 1, rel=1e-9)
+    assert checks["speed"]["passed"] and res.section["limits"]["all_passed"] is False
+
+
+def test_required_static_safety_moves_the_verdict(default_rating):
+    """s0 = C_0a / 20 kN = 4.72: passes the default 2 and fails a required 5 (the catalogue
+    value with vibration or impact)."""
+    d, c, m, _ = default_rating
+    strict = PRSDesign(rating=RatingSettings(required_static_safety=5.0))
+    ch = {k["name"]: k for k in R.analyse_rating(strict, c, m).section["limits"]["checks"]}["static_safety"]
+    assert ch["limit"] == 5.0 and not ch["passed"] and ch["margin"] == pytest.approx(ch["value"] / 5.0 - 1)
+
+
+def test_limit_check_margins_and_equality():
+    up = R.limit_check("speed", 100.0, 6250.0)
+    assert up == {"name": "speed", "kind": "upper", "value": 100.0, "limit": 6250.0, "unit": "rpm",
+                  "margin": 61.5, "passed": True}
+    assert R.limit_check("buckling", 4.0, 2.0)["margin"] == -0.5            # twice the limit
+    lo = R.limit_check("static_safety", 1.0, 2.0)
+    assert lo["margin"] == -0.5 and lo["passed"] is False and lo["kind"] == "lower"
+    assert R.limit_check("static_safety", 2.0, 2.0)["passed"] and R.limit_check("dn", 5.0, 5.0)["passed"]

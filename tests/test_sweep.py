@@ -15,6 +15,7 @@ from prs_geom.analysis.loads import (axial_stiffness, build_model, design_pitch,
                                      off_design, with_pitch_lists)
 from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread, default_design
 from prs_geom.model.errors import DesignError, EnvironmentFailure
+from prs_geom.model.plausibility import design_warnings
 from prs_geom.scaleout import DASK_INSTALL
 from prs_geom.sweep import CHUNK_POINTS, SweepPoint, add_arguments, point_design, run, sweep
 
@@ -46,10 +47,14 @@ def test_sweep_order_columns_and_progress(serial):
     assert rows[-1]["screw_starts"] == rows[-1]["nut_starts"] == 5 and rows[-1]["design_load_N"] == 20_000.0
     assert res.units["pitch_mm"] == "mm" and res.units["graded_stiffness_N_per_um"] == "N/um"
     assert res.units["max_pitch_correction_um"] == "um" and res.units["design_load_N"] == "N"
-    assert [c.name for c in res.columns][12:16] == ["graded_max_ldc_25pct", "graded_max_ldc_50pct",
+    assert [c.name for c in res.columns][13:17] == ["graded_max_ldc_25pct", "graded_max_ldc_50pct",
                                                     "graded_max_ldc_100pct", "graded_max_ldc_150pct"]
     assert calls == [("sweep", k, N_POINTS) for k in (4, 8, 12, 16)]
-    assert res.count("ok") == N_POINTS
+    # the 4-start points break the standard sizing of 24/8/40 mm and their rollers drift:
+    # valid with warnings, not valid (issue 28)
+    assert res.count("ok") == res.count("warnings") == N_POINTS // 2
+    assert res.counts() == {"ok": 8, "warnings": 8, "invalid": 0, "failed": 0}
+    assert res.summary() == "16 points, 8 valid, 8 valid with warnings, 0 invalid, 0 failed"
 
 
 def test_sweep_values_equal_the_direct_calls(serial):
@@ -64,7 +69,7 @@ def test_sweep_values_equal_the_direct_calls(serial):
         pd = design_pitches(d, model=model)
         graded = with_pitch_lists(d, pd)
         off = off_design(graded, (0.25, 0.5, 1.0, 1.5), model=model)
-        assert row["status"] == "ok" and row["reason"] == ""
+        assert row["status"] == ("ok" if s == 5 else "warnings") and row["reason"] == ""
         assert row["constant_max_ldc"] == max(const.ldc_nr.max(), const.ldc_rs.max())
         for o in off:
             assert row[f"graded_max_ldc_{o['load_fraction'] * 100:g}pct"] == o["max_ldc"]
@@ -75,6 +80,9 @@ def test_sweep_values_equal_the_direct_calls(serial):
         # the sizing relations the point breaks (starts 4 on 24/8/40 mm) are reported, not errors
         assert row["sizing_warnings"] == " | ".join(d.sizing_warnings())
         assert (row["sizing_warnings"] != "") == (s == 4)
+        assert row["plausibility_warnings"] == " | ".join(design_warnings(d))
+        # 4 starts on 24/8/40 mm: drift h p (r_s / (r_s + r_n)) (n_n - r_n / r_r) = 1.5 x 0.375 x (4 - 5)
+        assert ("rollers drift axially by -0.5625 mm per screw turn" in row["plausibility_warnings"]) == (s == 4)
 
 
 def test_equal_load_design_shares_equally_at_its_load_only(serial):
@@ -116,7 +124,8 @@ def test_written_dimensions_are_kept_and_defaulted_ones_follow_the_point():
     base = PRSDesign(screw=Screw(length_mm=48.0))
     rows = sweep(base, teeth=[20, 30], workers=1).rows()
     assert rows[0]["status"] == "ok"
-    assert rows[1]["reason"] == "screw.length_mm = 48.0: must be at least the engaged length n p = 60.0 mm"
+    assert rows[1]["reason"] == ("screw.length_mm = 48.0: must be at least the engaged length n p = 60.0 mm "
+                                 "(thread.engaged_teeth x thread.pitch_mm = 30 x 2.0)")
     # defaulted on the default design: re-derived for the point, so the point is valid
     d = point_design(default_design(), SweepPoint(0, None, 10, 1.5, 30, 1.0))
     assert d.screw.length_mm == 34 * 1.5 and d == by_hand(5, 10, 1.5, 30, 1.0)
@@ -197,10 +206,11 @@ def test_run_prints_json_and_hands_the_csv_to_the_writer():
     assert code == 0
     data = json.loads(out)
     assert [r["status"] for r in data["rows"]] == ["ok", "invalid"]
+    assert data["counts"] == {"ok": 1, "warnings": 0, "invalid": 1, "failed": 0}
     assert data["rows"][1]["constant_max_ldc"] is None
     assert {"name": "pitch_mm", "unit": "mm", "description": "axial pitch p"} in data["columns"]
     assert len(written) == 1 and written[0].splitlines()[0].startswith("point,screw_starts,nut_starts,rollers")
-    assert "wrote s.csv: 2 points, 1 valid" in err
+    assert "wrote s.csv: 2 points, 1 valid, 0 valid with warnings, 1 invalid, 0 failed" in err
     code, out, _ = _run(["--rollers", "10", "12", "--teeth", "6", "--workers", "1"])
     assert "2 points, 1 valid" in out and "invalid: roller.count = 12" in out
 
@@ -238,3 +248,25 @@ def test_cli_sweep_exit_codes(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
     code, _, err = cli(["sweep", "--teeth", "6", "--scheduler", "tcp://127.0.0.1:8786"])
     assert code == 3 and DASK_INSTALL in err
+
+
+def test_valid_with_warnings_is_counted_apart_in_table_csv_and_json():
+    """A drifting point (4 starts on the 24/8/40 mm default: r_n = 20 != n_n r_r = 16) and an
+    implausible one (a 0.05 mm pitch, probably metres) are valid with warnings; a point that
+    breaks a rule is invalid; the counts, the status column and the JSON say so (issue 28)."""
+    written = []
+    code, out, err = _run(["--starts", "4", "5", "--rollers", "10", "12", "--teeth", "6", "--workers", "1",
+                           "--out", "s.csv"], write_out=written.append)
+    assert code == 0
+    assert "4 points, 1 valid, 1 valid with warnings, 2 invalid, 0 failed" in out
+    assert "rollers drift axially by -0.75 mm per screw turn" in out          # 2 x 0.375 x (4 - 5)
+    rows = list(csv.DictReader(io.StringIO(written[0])))
+    assert [(r["screw_starts"], r["rollers"], r["status"]) for r in rows] == [
+        ("4", "10", "warnings"), ("4", "12", "invalid"), ("5", "10", "ok"), ("5", "12", "invalid")]
+    assert "drift" in rows[0]["plausibility_warnings"] and rows[2]["plausibility_warnings"] == ""
+    assert float(rows[0]["constant_max_ldc"]) > 1.0            # a point with warnings is evaluated
+    res = sweep(default_design(), pitch_mm=[0.05], teeth=[6], workers=1)
+    row = res.rows()[0]
+    assert row["status"] == "warnings" and row["sizing_warnings"] == ""
+    assert row["plausibility_warnings"].startswith("thread.pitch_mm = 0.05 is below the plausible minimum 0.1 mm")
+    assert res.to_json()["counts"] == {"ok": 0, "warnings": 1, "invalid": 0, "failed": 0}

@@ -354,3 +354,21 @@ def test_synthesis_refuses_too_few_samples_up_front(graded):
     assert code == 2 and "--confidence = 1.5" in err
     code, out, err = _run(["tolerance", "--workers", "2", "--dask-workers", "2"])
     assert code == 2 and err.startswith("error: --workers")
+
+
+def test_a_study_without_an_error_model_is_refused_naming_the_design_field():
+    """Issue 28: no [tolerances] and no tolerances given: a DesignError on the design field
+    ``tolerances`` (the library knows no CLI flags), raised before any solve; an explicit
+    model, even of zeros, is accepted."""
+    d = default_design()
+    with pytest.raises(DesignError) as exc:
+        studies.tolerance_study(d, None, model=object(), contact=object())      # never reaches them
+    assert exc.value.field == "tolerances" and exc.value.value is None
+    assert "no error model" in exc.value.rule and "tolerances.flank_um" in exc.value.rule
+    assert "--" not in exc.value.rule
+    with pytest.raises(DesignError, match=r"^tolerances = \(not set\): the design has no error model"):
+        studies.require_error_model(d)
+    zero = Tolerances()
+    assert studies.require_error_model(d, zero) is zero
+    with_section = d.with_changes(tolerances=Tolerances(flank_um=0.5))
+    assert studies.require_error_model(with_section).flank_um == 0.5

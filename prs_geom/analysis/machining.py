@@ -26,12 +26,23 @@ parts), and B, the mid-plane of the radial slot cut into A at theta = 0
 flank's axial position at the pitch diameter, at theta = 0, from A: designed, and on the base
 cut (tooth 1's mid-plane lies p/2 from A on the roller and on A on the nut, so the nut's
 tooth 1 lower flank is not on the part there: ``on_part`` marks it); the axial shift
-is their difference (designed = base + shift exactly, to rounding). Inspection value: the
+is their difference. Inspection value: the
 designed flank position (mm). Per-flank tolerances come from the design's ``[tolerances]``
 (e.g. written by a tolerance synthesis), else "not synthesised". All lengths at 20 degC.
 Loaded flanks (load path of :mod:`prs_geom.loads`): roller upper flank by the screw, roller
 lower flank by the nut; nut upper flank by the roller. The nut's lower flank carries no
 load; grinding it keeps the designed tooth thickness and may be skipped.
+
+Numbers on the sheets (issue 28): every length in mm is rounded to 1e-9 mm (``round(x, 9)``)
+and every length in um to 1e-6 um (``round(x, 6)``), the same 1 pm, a thousandth of the
+smallest pitch correction that matters, so that no sheet carries float noise such as
+0.49999999999999956. The designed and base flank positions are rounded first and the axial
+shift is derived from the rounded pair, shift_um = round((designed - base) x 1000, 6), so that
+on every row, read back from the CSV with Python's float(),
+``round(base + shift / 1000, 9) == designed`` holds exactly (and |base + shift / 1000 -
+designed| < 1e-12 mm); the sign of the shift and the 0 of the datum flanks survive the
+rounding (it is monotone). Pitches, thicknesses, stock and lead deviations follow the same
+rule; a pitch on the sheet may therefore differ from the design file's by up to 5e-10 mm.
 """
 from __future__ import annotations
 
@@ -68,6 +79,18 @@ _TOLERANCE_FIELD = {("roller", "upper"): "roller_screw_flank_um", ("roller", "lo
                     ("nut", "upper"): "nut_flank_um"}
 #: Reference temperature of every length on the sheets (ISO 1), degC.
 REFERENCE_TEMPERATURE_C = 20.0
+#: Decimals of the lengths on the sheets: mm to 1e-9 mm, um to 1e-6 um (module docstring).
+MM_DECIMALS, UM_DECIMALS = 9, 6
+
+
+def mm(x: float) -> float:
+    """A length in mm as the sheets state it: rounded to 1e-9 mm, never -0.0."""
+    return round(float(x), MM_DECIMALS) + 0.0
+
+
+def um(x: float) -> float:
+    """A length in um as the sheets state it: rounded to 1e-6 um, never -0.0."""
+    return round(float(x), UM_DECIMALS) + 0.0
 
 
 @dataclass(frozen=True)
@@ -103,11 +126,11 @@ def start_table(design: PRSDesign, part: str) -> list[dict[str, Any]]:
         leads = [float(z[j - 1 + starts] - z[j - 1]) for j in teeth if j - 1 + starts < n]
         out.append({
             "start": k + 1,
-            "angular_index_deg": 360.0 * k / starts,
-            "axial_offset_mm": float(z[k]) if k < n else k * p,
-            "nominal_lead_mm": starts * p,
-            "lead_min_mm": min(leads) if leads else starts * p,
-            "lead_max_mm": max(leads) if leads else starts * p,
+            "angular_index_deg": mm(360.0 * k / starts),
+            "axial_offset_mm": mm(z[k] if k < n else k * p),
+            "nominal_lead_mm": mm(starts * p),
+            "lead_min_mm": mm(min(leads) if leads else starts * p),
+            "lead_max_mm": mm(max(leads) if leads else starts * p),
             "teeth_at_theta_0": teeth,
         })
     return out
@@ -148,30 +171,30 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     for j in range(n):
         for flank in ("lower", "upper"):
             # flank positions at the pitch diameter from the datum (lower flank of tooth 1):
-            # designed z_j (+ 2t upper), base cut (j - 1) p_b (+ Delta_n + 2t upper); base is
-            # written as designed - shift so that designed = base + shift / 1000 holds to
-            # rounding (about 1e-15 mm)
+            # designed z_j (+ 2t upper), base cut (j - 1) p_b (+ Delta_n + 2t upper)
             shift = delta[j] if flank == "lower" else delta[j] - delta_n
-            designed = float(mid1 + z[j] - t) if flank == "lower" else float(mid1 + z[j] + t)
-            # = (j - 1) p_b (lower), (j - 1) p_b + Delta_n + 2 t (upper); from the shift so that
-            # the shift keeps its exact sign (0 on the datum teeth)
-            base_pos = designed - float(shift)
+            exact = float(mid1 + z[j] - t) if flank == "lower" else float(mid1 + z[j] + t)
+            # base = (j - 1) p_b (lower), (j - 1) p_b + Delta_n + 2 t (upper), taken as
+            # designed - shift so that the shift keeps its exact sign (0 on the datum teeth);
+            # both rounded to 1e-9 mm, the shift derived from the rounded pair (module docstring)
+            designed, base_pos = mm(exact), mm(exact - float(shift))
+            shift_um = um((designed - base_pos) * 1e3)
             fld = _TOLERANCE_FIELD.get((part, flank))
             rows.append({
                 "tooth": j + 1,
                 "flank": flank,
                 "loaded_by": loaded[flank],
-                "designed_pitch_mm": float(pl[j]) if j < n - 1 else None,
-                "base_pitch_mm": p_b,
+                "designed_pitch_mm": mm(pl[j]) if j < n - 1 else None,
+                "base_pitch_mm": mm(p_b),
                 "designed_position_mm": designed,
                 "base_position_mm": base_pos,
-                "axial_shift_um": float(shift) * 1e3,
-                "lead_deviation_um": float(lead_dev[j]),
-                "tooth_thickness_mm": 2.0 * t,
-                "base_tooth_thickness_mm": 2.0 * t + delta_n,
-                "normal_stock_um": float(abs(shift) * nz[flank] * 1e3),
-                "tolerance_um": (float(per_tooth[fld][j]) if per_tooth is not None and fld is not None else None),
-                "worked": bool(abs(shift) > 0.0),
+                "axial_shift_um": shift_um,
+                "lead_deviation_um": um(lead_dev[j]),
+                "tooth_thickness_mm": mm(2.0 * t),
+                "base_tooth_thickness_mm": mm(2.0 * t + delta_n),
+                "normal_stock_um": um(abs(shift_um) * nz[flank]),
+                "tolerance_um": (um(per_tooth[fld][j]) if per_tooth is not None and fld is not None else None),
+                "worked": bool(abs(shift_um) > 0.0),
                 # a flank of a partial end tooth (cut by the end face at theta = 0)
                 "on_part": bool(-1e-12 <= designed <= length + 1e-12),
                 "inspection_position_mm": designed,
@@ -192,15 +215,15 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
                  f"the radial slot in face A at theta = 0 ({mark.width:g} mm wide, {mark.depth:g} mm deep, radius "
                  f"{mark.r_inner:.3f} to {mark.r_outer:.3f} mm); every position is the flank's axial distance "
                  "from A at the pitch diameter, at theta = 0",
-        "base_pitch_mm": p_b,
-        "base_tooth_thickness_stock_um": delta_n * 1e3,
-        "pitch_diameter_mm": 2.0 * prof.pitch_radius,
+        "base_pitch_mm": mm(p_b),
+        "base_tooth_thickness_stock_um": um(delta_n * 1e3),
+        "pitch_diameter_mm": mm(2.0 * prof.pitch_radius),
         "flank_half_angle_deg": design.thread.flank_half_angle_deg,
         "teeth": n,
         "tolerance": tol_text,
         "cumulative_lead_tolerance_um": (tol.lead_um if tol is not None and tol.lead_um > 0 else None),
         "reference_temperature_degC": REFERENCE_TEMPERATURE_C,
-        "thermal_growth_of_engaged_length_um_per_K": float((n - 1) * design.thread.pitch_mm * alpha * 1e3),
+        "thermal_growth_of_engaged_length_um_per_K": um((n - 1) * design.thread.pitch_mm * alpha * 1e3),
         "process": "cut at the base pitch with the thickness stock, then grind lower flanks +z "
                    "(datum tooth 1) and upper flanks -z (datum tooth n)",
         "constant_pitch": bool(np.all(pl == pl[0])),

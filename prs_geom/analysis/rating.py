@@ -57,6 +57,11 @@ pressure ``rating.static_pressure_limit_mpa`` (4200 MPa, ISO 76 point contact), 
 sharing; the static safety against the material limit from the actual tooth loads is
 (p_lim / p_max)^3 (the load factor, p is proportional to Q^(1/3)).
 
+Limit checks (issue 28): ``limits.checks`` lists speed, d n, critical speed, buckling and
+static safety as ``{name, kind, value, limit, unit, margin, passed}`` at the largest duty
+speed and load (:data:`LIMIT_CHECKS`; margin = limit / value - 1 for an upper limit, value /
+limit - 1 for the lower limit s_0 >= ``rating.required_static_safety``; >= 0 passes).
+
 Catalogue life (DOMAIN 7, ISO 3408-5): F_m = (sum F_i^3 n_i q_i / sum n_i q_i)^(1/3),
 n_m = sum n_i q_i, L10 = a_1 (C_a / (f_w F_m))^3 10^6 revolutions, hours L10 / (60 n_m),
 a_1 from the table of ISO 3408-5 / ISO 281:1990 at its points (95 %: 0.62, 96: 0.53,
@@ -85,7 +90,8 @@ __all__ = ["LP_C", "LP_H", "WEIBULL_E", "LP_BALL_CONSTANT", "A1_TABLE", "END_CAS
            "lp_stress_functions", "ring_capacity", "lp_ball_raceway_capacity", "general_ball_raceway_capacity",
            "calibration_constant", "calibration_spread", "ContactRings", "contact_rings", "dynamic_load_rating",
            "static_load_rating", "system_life", "hertz_pressure", "efficiency", "drive_torque", "critical_speed",
-           "buckling_load", "double_nut", "RatingCase", "RatingResult", "analyse_rating"]
+           "buckling_load", "double_nut", "LIMIT_CHECKS", "limit_check", "limit_checks", "limit_warnings",
+           "RatingCase", "RatingResult", "analyse_rating"]
 
 #: Lundberg-Palmgren exponents of point contact: stress c, depth h, Weibull slope e; they
 #: give the load-life exponent (c - h + 2) / (3 e) = 3.
@@ -426,6 +432,76 @@ def double_nut(loads_n: NDArray, deflection_mm: NDArray, preload_n: float,
             "lift_off_n": lift}
 
 
+# --------------------------------------------------------------------------- limit checks
+#: The limit checks of ``rating.limits.checks``, in order: name -> (kind, unit, what is
+#: compared). "upper": the value must not exceed the limit, margin = limit / value - 1;
+#: "lower": the value must not fall below it, margin = value / limit - 1. Either way a
+#: margin >= 0 passes and reads as headroom: 0.25 means the limit is 25 % above the value
+#: (upper) or the value 25 % above the limit (lower); -0.5 means the value is twice the upper
+#: limit or half the lower one.
+LIMIT_CHECKS: dict[str, tuple[str, str, str]] = {
+    "speed": ("upper", "rpm", "largest duty speed against the permissible speed (the smaller of the d n "
+                              "speed limit and the permissible critical speed)"),
+    "dn": ("upper", "mm/min", "nominal diameter x largest duty speed against rating.dn_limit_mm_rpm"),
+    "critical_speed": ("upper", "rpm", "largest duty speed against supports.critical_speed_factor x the first "
+                                       "whirling speed"),
+    "buckling": ("upper", "N", "largest duty load against the Euler buckling load / supports.buckling_safety"),
+    "static_safety": ("lower", "-", "s_0 = C_0a / largest duty load against rating.required_static_safety"),
+}
+
+
+def limit_check(name: str, value: float, limit: float) -> dict[str, Any]:
+    """One entry of ``rating.limits.checks``: ``{name, kind, value, limit, unit, margin,
+    passed}`` with the margin of :data:`LIMIT_CHECKS` (upper: limit / value - 1, lower:
+    value / limit - 1); ``passed`` when the margin is >= 0 (the value may equal the limit)."""
+    kind, unit, _ = LIMIT_CHECKS[name]
+    value, limit = float(value), float(limit)
+    margin = limit / value - 1.0 if kind == "upper" else value / limit - 1.0
+    passed = value <= limit if kind == "upper" else value >= limit
+    return {"name": name, "kind": kind, "value": value, "limit": limit, "unit": unit, "margin": margin,
+            "passed": bool(passed)}
+
+
+def limit_checks(limits: dict[str, Any], max_load_n: float, static_safety: float, required_static_safety: float,
+                 nominal_diameter_mm: float) -> list[dict[str, Any]]:
+    """The five checks of ``rating.limits`` (:data:`LIMIT_CHECKS`) from its numbers."""
+    n = limits["max_speed_rpm"]
+    return [limit_check("speed", n, limits["permissible_speed_rpm"]),
+            limit_check("dn", nominal_diameter_mm * n, limits["dn_limit_mm_rpm"]),
+            limit_check("critical_speed", n, limits["permissible_critical_speed_rpm"]),
+            limit_check("buckling", max_load_n, limits["permissible_buckling_load_n"]),
+            limit_check("static_safety", static_safety, required_static_safety)]
+
+
+_FAIL_TEXT = {
+    "speed": "speed {v} rpm exceeds the permissible {l} rpm (the smaller of the d n limit and the critical speed "
+             "limit)",
+    "dn": "d n = nominal diameter x speed = {v} mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
+          "{l} mm/min",
+    "critical_speed": "speed {v} rpm exceeds the permissible critical speed {l} rpm (supports.critical_speed_factor "
+                      "x the first whirling speed)",
+    "buckling": "axial load {v} N exceeds the permissible buckling load {l} N (Euler load / "
+                "supports.buckling_safety)",
+    "static_safety": "static safety s0 = C_0a / F_max = {v} is below the required {l} "
+                     "(rating.required_static_safety)",
+}
+
+
+def _plain(x: float) -> str:
+    """A number as an engineer writes it: whole from 1000 up (10000, 13215714), 4 significant
+    digits from 0.001 to 1000, else scientific (4.72e-05)."""
+    if abs(x) >= 1000.0:
+        return f"{x:.0f}"
+    return f"{x:.4g}" if abs(x) >= 1e-3 else f"{x:.3g}"
+
+
+def limit_warnings(checks: Sequence[dict[str, Any]]) -> list[str]:
+    """One sentence per failed check, e.g. "speed 10000 rpm exceeds the permissible 6250 rpm
+    (...)"."""
+    return [_FAIL_TEXT[c["name"]].format(v=_plain(c["value"]), l=_plain(c["limit"])) for c in checks
+            if not c["passed"]]
+
+
 # --------------------------------------------------------------------------- the analysis
 @dataclass(frozen=True)
 class RatingCase:
@@ -648,6 +724,7 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
             "buckling_ends": sup.buckling_ends, "buckling_load_n": F_buck, "buckling_safety": sup.buckling_safety,
             "permissible_buckling_load_n": F_buck / sup.buckling_safety,
             "buckling_ok": bool(Fmax <= F_buck / sup.buckling_safety),
+            "required_static_safety": rs.required_static_safety,
         },
         "efficiency": {**{k: v for k, v in eff.items()}, "friction_coefficient": rs.friction_coefficient,
                        "lead_mm": lead, "torque_load_n": Fmax, "drive_torque_nm": T_drive,
@@ -659,6 +736,9 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
                        "load_n": ext.tolist(), "displacement_um": (x * 1e3).tolist(),
                        "stiffness_n_per_um": k_dn.tolist(), "single_nut_displacement_um": (single_x * 1e3).tolist()},
     }
+    lim = section["limits"]
+    lim["checks"] = limit_checks(lim, Fmax, C0a / Fmax, rs.required_static_safety, design.screw.pitch_diameter_mm)
+    lim["all_passed"] = all(c["passed"] for c in lim["checks"])
     curves = {"names": names, "fractions": list(CURVE_FRACTIONS), "curve_loads_n": curve,
               "life_hours": {k: life_curve[i] / (60.0 * n_m) for i, k in enumerate(names)},
               "pressure": {k: dist[k]["hertz_pressure_mpa"] for k in names}, "pressure_load_n": Fmax,

@@ -58,6 +58,7 @@ from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.geometry.sections import axial_section
 from prs_geom.model.design import PRSDesign
+from prs_geom.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
 PARTS = ("screw", "roller", "nut")
@@ -502,27 +503,38 @@ def _render_pages(docs: list, path: Path) -> None:
 
 
 def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
-                   version: str = __version__, pdf: bool = True, extra: dict | None = None) -> list[str]:
+                   version: str = __version__, pdf: bool = True, extra: dict | None = None,
+                   progress: ProgressFn | None = None) -> list[str]:
     """Write ``drawing_screw.dxf``, ``drawing_roller.dxf``, ``drawing_nut.dxf``, the documents
     of ``extra`` ({file name: ezdxf document}, e.g. the mechanism drawings of
     :func:`prs_geom.exports.mechanism_drawing.write_all_drawings`) and (``pdf``)
     ``drawings.pdf`` (a page each, in that order) into ``out_dir``; ``contact`` is the contact stage's
-    :class:`~prs_geom.analysis.contact.ContactResult` (theoretical screw). Returns the file
-    names written."""
+    :class:`~prs_geom.analysis.contact.ContactResult` (theoretical screw);
+    ``progress(stage, done, total)`` after each drawing and the PDF. Returns the file names
+    written."""
     from prs_geom.exports.dxf import save_dxf
 
     out = Path(out_dir)
     names, docs = [], []
+    total = len(PARTS) + len(extra or {}) + (1 if pdf else 0)
+
+    def step() -> None:
+        if progress is not None:
+            progress("drawings", len(names), total)
+
     for part in PARTS:
         doc = build_drawing(design, contact, part, date, version)
         save_dxf(doc, out / drawing_name(part))
         names.append(drawing_name(part))
         docs.append(doc)
+        step()
     for name, doc in (extra or {}).items():
         save_dxf(doc, out / name)
         names.append(name)
         docs.append(doc)
+        step()
     if pdf:
         render_pdf(docs, out / DRAWING_PDF)
         names.append(DRAWING_PDF)
+        step()
     return names

@@ -29,6 +29,7 @@ from prs_geom.exports.drawing import (FRAME, NOTES, SHEET, TEXT_H, TITLE_H, _dim
                                       _new_doc, _scale_text, _stamp, _title_block)
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
+from prs_geom.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
 #: Mechanism drawings in sheet order: (key, file name).
@@ -312,14 +313,15 @@ def mechanism_drawings(design: PRSDesign, lay: MechanismLayout, parts: list[Any]
 
 
 def write_all_drawings(design: PRSDesign, contact: Any, out_dir: Path | str, date: str,
-                       version: str = __version__, pdf: bool = True) -> list[str]:
+                       version: str = __version__, pdf: bool = True, progress: ProgressFn | None = None) -> list[str]:
     """The build's drawings: the thread parts' (:func:`prs_geom.exports.drawing.write_drawings`)
     and, when the design has them, the carrier, nut end and assembly drawings, all as pages
-    of ``drawings.pdf``. Returns the file names written."""
+    of ``drawings.pdf``. ``progress(stage, done, total)`` after each drawing and the PDF.
+    Returns the file names written."""
     from prs_geom.exports.bom import part_items
     from prs_geom.exports.drawing import write_drawings
     from prs_geom.geometry.mechanism import layout
 
     lay = layout(design)
     extra = mechanism_drawings(design, lay, part_items(design), date, version) if lay is not None else None
-    return write_drawings(design, contact, out_dir, date, version, pdf, extra)
+    return write_drawings(design, contact, out_dir, date, version, pdf, extra, progress=progress)

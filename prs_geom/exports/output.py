@@ -7,7 +7,16 @@ the files it wrote and the version that wrote them. An output path may be
 
 * a path that does not exist yet (its parent folders are created),
 * an empty folder, or
-* a folder carrying that manifest and nothing else than the files its manifest lists.
+* a folder carrying that manifest and nothing else than the files its manifest lists,
+  each of them as prs-geom wrote it.
+
+Ownership is by content: the manifest (format 2) records the SHA-256 of every file written.
+A file whose content changed since (a line added to ``parts_list.csv`` by hand) is the
+user's now, and a build that would replace it is refused naming the file, unless it is
+given ``force`` (``--force``). A folder with a manifest of format 1 (names only) is
+rebuilt once, with a warning (:func:`legacy_manifest`). The design file a build reads may
+lie inside its own output folder: that file is exempt from the check (``keep``) and the
+new folder holds it byte for byte as it was (:class:`AtomicOutputDir`).
 
 Anything else is refused before any work starts (:class:`OutputRefused`, exit code 2),
 naming the path and what is in the way; nothing is touched. A file given where a folder
@@ -43,11 +52,12 @@ from prs_geom.model.errors import OutputRefused
 from prs_geom.model.io import check_output_file, is_office_lock, write_file_atomic
 
 __all__ = ["MANIFEST_NAME", "AtomicOutputDir", "OutputRefused", "check_output_dir", "check_output_file",
-           "clean_stale", "read_manifest", "write_file_atomic"]
+           "clean_stale", "file_sha256", "legacy_manifest", "read_manifest", "write_file_atomic"]
 
 #: Name of the manifest that marks a folder as written by prs-geom.
 MANIFEST_NAME = ".prs-geom-manifest.json"
-MANIFEST_FORMAT = 1
+#: 1: names only; 2: names and the SHA-256 of each file (``sha256``).
+MANIFEST_FORMAT = 2
 #: Temporary and set-aside folders: .<target>.tmp-<pid>-<hex> and .<target>.old-<pid>-<hex>.
 _TEMP_RE = re.compile(r"^\.(?P<target>.+)\.(?P<kind>tmp|old)-(?P<pid>\d+)-[0-9a-f]{8}$")
 
@@ -62,6 +72,33 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
             not isinstance(data.get("files"), list):
         return None
     return data
+
+
+def file_sha256(path: Path) -> str:
+    """SHA-256 of a file's bytes, hex."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def legacy_manifest(folder: str | os.PathLike[str]) -> bool:
+    """Whether ``folder`` carries a prs-geom manifest without content hashes (format 1):
+    such a folder is rebuilt once without the content check, which the caller announces."""
+    manifest = read_manifest(Path(folder))
+    return manifest is not None and not isinstance(manifest.get("sha256"), dict)
+
+
+def _with_parents(names: set[str]) -> set[str]:
+    """``names`` and every folder that holds one of them (POSIX relative paths)."""
+    out = set(names)
+    for f in names:
+        parts = f.split("/")
+        out.update("/".join(parts[:k]) for k in range(1, len(parts)))
+    return out
 
 
 def _entries(folder: Path) -> list[str]:
@@ -85,10 +122,13 @@ def _describe(names: Iterable[str], limit: int = 5) -> str:
     return ", ".join(shown) + more
 
 
-def check_output_dir(target: str | os.PathLike[str]) -> Path:
+def check_output_dir(target: str | os.PathLike[str], force: bool = False, keep: Iterable[str] = ()) -> Path:
     """Check that prs-geom may (re)write ``target``; return it resolved.
 
-    Raises :class:`OutputRefused` naming the path and what is in the way.
+    ``force`` lets a build replace listed files whose content changed since prs-geom wrote
+    them; ``keep`` names files (relative POSIX paths) exempt from that check: the design
+    file the build reads from inside the folder. Raises :class:`OutputRefused` naming the
+    path and what is in the way.
     """
     given = str(target)
     path = Path(target).resolve()
@@ -106,7 +146,10 @@ def check_output_dir(target: str | os.PathLike[str]) -> Path:
     if not path.is_dir():
         raise OutputRefused(f"output path {given!r} is an existing file, not a folder: prs-geom does "
                             f"not replace files it did not write; give a folder")
-    entries = _entries(path)
+    # the design file a build reads from inside the folder is the user's and stays there
+    keep = set(keep)
+    kept = _with_parents(keep)
+    entries = [e for e in _entries(path) if e not in kept]
     if not entries:
         return path
     manifest = read_manifest(path)
@@ -114,16 +157,21 @@ def check_output_dir(target: str | os.PathLike[str]) -> Path:
         raise OutputRefused(f"output folder {given!r} is not empty and was not written by prs-geom "
                             f"(no {MANIFEST_NAME}); in the way: {_describe(entries)}. Nothing was "
                             f"touched: give a new or empty folder")
-    listed = set(manifest["files"]) | {MANIFEST_NAME}
-    # folders that hold listed files are the manifest's too
-    for f in list(listed):
-        parts = f.split("/")
-        listed.update("/".join(parts[:k]) for k in range(1, len(parts)))
+    listed = _with_parents(set(manifest["files"]) | {MANIFEST_NAME})
     foreign = [e for e in entries if e not in listed]
     if foreign:
         raise OutputRefused(f"output folder {given!r} was written by prs-geom but now also holds "
                             f"files it did not write: {_describe(foreign)}. Nothing was touched: move "
                             f"them out or give another folder")
+    hashes = manifest.get("sha256")
+    if isinstance(hashes, dict) and not force:
+        edited = [name for name in manifest["files"]
+                  if name not in keep and (path / name).is_file() and hashes.get(name) != file_sha256(path / name)]
+        if edited:
+            raise OutputRefused(f"output folder {given!r}: {_describe(edited)} changed since prs-geom wrote "
+                                f"{'it' if len(edited) == 1 else 'them'}; a build would replace "
+                                f"{'it' if len(edited) == 1 else 'them'}. Nothing was touched: copy your "
+                                f"changes elsewhere, or give --force to replace them")
     return path
 
 
@@ -167,13 +215,13 @@ def clean_stale(parent: Path) -> list[str]:
     return done
 
 
-def _manifest(files: list[str], complete: bool, extra: dict[str, Any]) -> str:
+def _manifest(files: list[str], complete: bool, extra: dict[str, Any], hashes: dict[str, str] | None = None) -> str:
     from prs_geom._version import __version__
 
     data = {"written_by": "prs-geom", "format_version": MANIFEST_FORMAT, "prs_geom_version": __version__,
             "complete": complete, "pid": os.getpid(),
             "written_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **extra,
-            "files": sorted(files)}
+            "files": sorted(files), "sha256": dict(sorted((hashes or {}).items()))}
     return json.dumps(data, indent=2) + "\n"
 
 
@@ -186,9 +234,18 @@ class AtomicOutputDir:
     ``target`` is untouched.
     """
 
-    def __init__(self, target: str | os.PathLike[str], manifest_extra: dict[str, Any] | None = None) -> None:
+    def __init__(self, target: str | os.PathLike[str], manifest_extra: dict[str, Any] | None = None,
+                 force: bool = False, source: str | os.PathLike[str] | None = None) -> None:
         self.given = str(target)
-        self.target = check_output_dir(target)
+        self.force = force
+        self.target = Path(target).resolve()
+        #: the input file when it lies inside the target: kept byte for byte (module doc)
+        self.keep: dict[str, bytes] = {}
+        if source is not None:
+            src = Path(source).resolve()
+            if self.target in src.parents and src.is_file():
+                self.keep[src.relative_to(self.target).as_posix()] = src.read_bytes()
+        self.target = check_output_dir(target, force, self.keep)
         self.extra = dict(manifest_extra or {})
         self.tmp: Path | None = None
         self.cleaned: list[str] = []
@@ -228,10 +285,15 @@ class AtomicOutputDir:
             shutil.rmtree(self.tmp, ignore_errors=True)
             return False
         try:
+            for name, data in self.keep.items():
+                # the design file read from inside the folder stays as the user wrote it
+                (self.tmp / name).parent.mkdir(parents=True, exist_ok=True)
+                (self.tmp / name).write_bytes(data)
             files = [e for e in _entries(self.tmp) if (self.tmp / e).is_file() and e != MANIFEST_NAME]
-            (self.tmp / MANIFEST_NAME).write_text(_manifest(files, True, self.extra), encoding="utf-8")
+            hashes = {f: file_sha256(self.tmp / f) for f in files}
+            (self.tmp / MANIFEST_NAME).write_text(_manifest(files, True, self.extra, hashes), encoding="utf-8")
             # the target may have changed while we worked: check again right before replacing
-            check_output_dir(self.target)
+            check_output_dir(self.target, self.force, self.keep)
         except BaseException:
             shutil.rmtree(self.tmp, ignore_errors=True)
             raise

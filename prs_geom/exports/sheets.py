@@ -1,8 +1,10 @@
 """Machining sheets as CSV (one per part) and one XLSX workbook (a sheet per part).
 
 CSV: ``#``-prefixed header lines (part, design, units, datum, ...), then one header row of
-column keys and one row per tooth and flank. Numbers are written with Python's shortest
-round-trip representation, so a reader gets back exactly the values in report.json.
+column keys and one row per tooth and flank. The sheets' numbers are rounded where they are
+made (:mod:`prs_geom.analysis.machining`: mm to 1e-9 mm, um to 1e-6 um) and written in the
+shortest form that reads back to the same float, always positional (``0.000001``, never
+``1e-06``), so a reader gets back exactly the values in report.json and no float noise.
 XLSX (openpyxl): a summary sheet with every part's header, then one table per part (numbers
 to about 16 significant digits, the precision of the format; shown to 0.01 um), formatted
 for printing (A4 landscape, fit to one page wide, title rows repeated on every page, units in
@@ -27,18 +29,27 @@ def _cell(v) -> str:
     return str(v)
 
 
+def _sheet_cell(v) -> str:
+    """A machining-sheet value: floats in the shortest round-trip digits, positional."""
+    if isinstance(v, float):
+        from numpy import format_float_positional
+
+        return format_float_positional(v, unique=True, trim="0")
+    return _cell(v)
+
+
 def sheet_csv(sheet: MachiningSheet) -> str:
     buf = io.StringIO()
     for k, v in sheet.header.items():
-        buf.write(f"# {k}: {_cell(v)}\n")
+        buf.write(f"# {k}: {_sheet_cell(v)}\n")
     for st in sheet.starts:
         buf.write(f"# start {st['start']}: " + ", ".join(
-            f"{k} {_cell(v) if not isinstance(v, list) else ' '.join(map(str, v))}"
+            f"{k} {_sheet_cell(v) if not isinstance(v, list) else ' '.join(map(str, v))}"
             for k, v in st.items() if k != "start") + "\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([c[0] for c in COLUMNS])
     for row in sheet.rows:
-        w.writerow([_cell(row[c[0]]) for c in COLUMNS])
+        w.writerow([_sheet_cell(row[c[0]]) for c in COLUMNS])
     return buf.getvalue()
 
 
@@ -59,8 +70,9 @@ def read_sheet_csv(text: str) -> tuple[dict[str, str], list[dict[str, str]]]:
 def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "", date: str = "") -> None:
     """The workbook: a ``summary`` sheet (the header of every part side by side), then one
     sheet per part holding only the table (title row, column titles with units, column keys,
-    one row per flank), frozen below the keys. Numbers keep full float64 precision; the
-    display format rounds mm to 0.00001 (0.01 um) and um to 0.01. Print setup: A4
+    one row per flank), frozen below the keys. Numbers are the sheet's (rounded to 1e-9 mm
+    and 1e-6 um, :mod:`prs_geom.analysis.machining`) and read back unchanged; the display
+    format rounds mm to 0.00001 (0.01 um) and um to 0.01. Print setup: A4
     landscape, fit to one page wide, title rows repeated, page header with design, part,
     date and version."""
     from openpyxl import Workbook

@@ -96,15 +96,19 @@ def default_budget_bytes() -> int:
     return int(DEFAULT_BUDGET_FRACTION * available_memory_bytes())
 
 
-_SIZE_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([kKmMgGtT]?)[iI]?[bB]?\s*$")
+_SIZE_RE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][+-]?[0-9]+)?)\s*([kKmMgGtT])[iI]?[bB]?\s*$")
 
 
 def parse_size(text: str, flag: str = "--memory-budget") -> int:
-    """Bytes of a size such as ``"8G"``, ``"512M"``, ``"2.5GB"`` or ``"1e9"`` (binary units)."""
-    m = _SIZE_RE.match(str(text))
+    """Bytes of a size with its unit, ``"8G"``, ``"512M"``, ``"2.5GB"``, ``"64KiB"`` (binary:
+    K = 1024 bytes). A bare number is refused: ``--memory-budget 100`` once meant 100 bytes
+    where the user meant megabytes."""
+    m = _SIZE_RE.match(str(text)[:64])
     if not m:
-        raise DesignError(flag, text, "must be a size such as 512M, 8G or 2.5GB")
-    value = float(m[1]) * 1024 ** " KMGT".index((m[2] or " ").upper())
+        shown = str(text)[:40] + ("..." if len(str(text)) > 40 else "")
+        raise DesignError(flag, shown, "must be a size with a unit, K, M or G (binary: 1K = 1024 bytes), "
+                                       "such as 512M, 8G or 2.5G")
+    value = float(m[1]) * 1024 ** " KMGT".index(m[2].upper())
     if not math.isfinite(value) or value <= 0:
         raise DesignError(flag, text, "must be a positive size")
     return int(value)

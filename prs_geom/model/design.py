@@ -186,7 +186,8 @@ class Material:
         # from magnesium alloys (1740) to tungsten carbide (15600) with margin
         _set(self, "density_kg_m3", bounded("density_kg_m3", self.density_kg_m3, 500.0, 25000.0,
                                             "must be from 500 to 25000 kg/m^3 (steel: 7850)", positive))
-        if not isinstance(self.name, str) or not 0 < len(self.name.strip()) <= 60:
+        # the raw length: the parts list and report.json carry the name as written
+        if not isinstance(self.name, str) or not self.name.strip() or len(self.name) > 60:
             raise DesignError("name", self.name, "must be a material name of 1 to 60 characters")
         # engineering solids span about 1 GPa (polymers) to 1.2 TPa (diamond); far outside,
         # the tooth compliances vanish or explode and the load system loses its conditioning
@@ -534,6 +535,14 @@ class Supports:
 #: Reliabilities (%) the life can be stated for: ISO 3408-5 and ISO 281:1990 tabulate a_1
 #: from 90 to 99 % (docs/theory/ratings.md).
 RELIABILITY_RANGE = (90.0, 99.0)
+#: Default of ``rating.required_static_safety``: the lower limit of the static safety factor
+#: f_s = C_0a / F_max a rolling-screw maker's catalogue gives for loads without vibration or
+#: impact (THK ball screw selection, "static safety factor": 2 without, 5 with vibration or
+#: impact). A catalogue value, not a standard's.
+DEFAULT_REQUIRED_STATIC_SAFETY = 2.0
+#: Accepted range of ``rating.required_static_safety``: below 1 the load would exceed the
+#: static rating; above 20 the check no longer says anything about the contacts.
+REQUIRED_STATIC_SAFETY_RANGE = (1.0, 20.0)
 
 
 @dataclass(frozen=True)
@@ -549,7 +558,11 @@ class RatingSettings:
     point contact, ISO 76). ``preload_n``: preload of the double-nut option; absent =
     design load / 2^(3/2), the preload a Hertzian double nut loses exactly at the design
     load. ``dn_limit_mm_rpm``: the nut speed limit as nominal diameter x speed (mm/min),
-    the maker's figure for the roller screw.
+    the maker's figure for the roller screw. ``required_static_safety``: the smallest static
+    safety s_0 = C_0a / F_max the limit checks accept (1 to 20); default 2, the lower limit
+    a rolling-screw maker's catalogue gives for loads without vibration or impact (THK ball
+    screw selection, "static safety factor": f_s >= 2 without, >= 5 with vibration or
+    impact); raise it for shocks.
     """
 
     friction_coefficient: float = 0.025
@@ -560,6 +573,7 @@ class RatingSettings:
     static_pressure_limit_mpa: float = 4200.0
     preload_n: float | None = None
     dn_limit_mm_rpm: float = 150_000.0
+    required_static_safety: float = DEFAULT_REQUIRED_STATIC_SAFETY
 
     def __post_init__(self) -> None:
         _set(self, "friction_coefficient", bounded("friction_coefficient", self.friction_coefficient, 0.0, 0.5,
@@ -578,6 +592,9 @@ class RatingSettings:
         _set(self, "preload_n", optional_positive("preload_n", self.preload_n))
         _set(self, "dn_limit_mm_rpm", bounded("dn_limit_mm_rpm", self.dn_limit_mm_rpm, 0.0, 1e7,
                                               "must be at most 1e7 mm/min", positive))
+        _set(self, "required_static_safety", bounded(
+            "required_static_safety", self.required_static_safety, *REQUIRED_STATIC_SAFETY_RANGE,
+            "must be from 1 to 20 (s_0 = C_0a / F_max; catalogues ask 2 without and 5 with vibration or impact)"))
 
 
 # --------------------------------------------------------------------------- assembly
@@ -627,16 +644,22 @@ class PRSDesign:
         half_depth = p / (4.0 * math.tan(beta))
         add, ded = DEFAULT_ADDENDUM_FACTOR * half_depth, DEFAULT_DEDENDUM_FACTOR * half_depth
         n = self.thread.engaged_teeth
-        h_from = "H = thread.pitch_mm / (4 tan thread.flank_half_angle_deg)"
+        # the notes name the formula, the fields it reads and their values, so that an error
+        # on a derived dimension says where it came from (issue 28)
+        h_from = (f"H = thread.pitch_mm / (4 tan thread.flank_half_angle_deg) = {half_depth:.6g} mm with "
+                  f"thread.pitch_mm = {p!r} and thread.flank_half_angle_deg = "
+                  f"{self.thread.flank_half_angle_deg!r}")
+        s, r, u = self.screw, self.roller, self.nut
         notes = {
-            "screw.major_diameter_mm": f"screw.pitch_diameter_mm + 1.2 H, {h_from}",
-            "screw.minor_diameter_mm": f"screw.pitch_diameter_mm - 1.6 H, {h_from}",
-            "screw.length_mm": "(thread.engaged_teeth + 4) x thread.pitch_mm",
-            "roller.arc_radius_mm": "roller.pitch_diameter_mm / (2 sin thread.flank_half_angle_deg)",
-            "roller.major_diameter_mm": f"roller.pitch_diameter_mm + 1.2 H, {h_from}",
-            "roller.minor_diameter_mm": f"roller.pitch_diameter_mm - 1.6 H, {h_from}",
-            "nut.major_diameter_mm": f"nut.pitch_diameter_mm + 1.6 H, {h_from}",
-            "nut.minor_diameter_mm": f"nut.pitch_diameter_mm - 1.2 H, {h_from}",
+            "screw.major_diameter_mm": f"screw.pitch_diameter_mm + 1.2 H = {s.pitch_diameter_mm!r} + 1.2 H, {h_from}",
+            "screw.minor_diameter_mm": f"screw.pitch_diameter_mm - 1.6 H = {s.pitch_diameter_mm!r} - 1.6 H, {h_from}",
+            "screw.length_mm": f"(thread.engaged_teeth + 4) x thread.pitch_mm = ({n} + 4) x {p!r}",
+            "roller.arc_radius_mm": (f"roller.pitch_diameter_mm / (2 sin thread.flank_half_angle_deg) = "
+                                     f"{r.pitch_diameter_mm!r} / (2 sin {self.thread.flank_half_angle_deg!r})"),
+            "roller.major_diameter_mm": f"roller.pitch_diameter_mm + 1.2 H = {r.pitch_diameter_mm!r} + 1.2 H, {h_from}",
+            "roller.minor_diameter_mm": f"roller.pitch_diameter_mm - 1.6 H = {r.pitch_diameter_mm!r} - 1.6 H, {h_from}",
+            "nut.major_diameter_mm": f"nut.pitch_diameter_mm + 1.6 H = {u.pitch_diameter_mm!r} + 1.6 H, {h_from}",
+            "nut.minor_diameter_mm": f"nut.pitch_diameter_mm - 1.2 H = {u.pitch_diameter_mm!r} - 1.2 H, {h_from}",
         }
         defaulted = {}
         for path, how in notes.items():
@@ -646,26 +669,48 @@ class PRSDesign:
         # not a dataclass field: derived bookkeeping, ignored by equality and I/O
         _set(self, "_defaulted", defaulted)
 
-        s = self.screw
-        _set(self, "screw", replace(
-            s,
+        _set(self, "screw", self._derived("screw", s, dict(
             major_diameter_mm=s.major_diameter_mm or _um(s.pitch_diameter_mm + 2 * add),
             minor_diameter_mm=s.minor_diameter_mm or _um(s.pitch_diameter_mm - 2 * ded),
             length_mm=s.length_mm or (n + 4) * p,
-        ))
-        r = self.roller
-        _set(self, "roller", replace(
-            r,
+        )))
+        _set(self, "roller", self._derived("roller", r, dict(
             arc_radius_mm=r.arc_radius_mm or 0.5 * r.pitch_diameter_mm / math.sin(beta),
             major_diameter_mm=r.major_diameter_mm or _um(r.pitch_diameter_mm + 2 * add),
             minor_diameter_mm=r.minor_diameter_mm or _um(r.pitch_diameter_mm - 2 * ded),
-        ))
-        u = self.nut
-        _set(self, "nut", replace(
-            u,
+        )))
+        _set(self, "nut", self._derived("nut", u, dict(
             major_diameter_mm=u.major_diameter_mm or _um(u.pitch_diameter_mm + 2 * ded),
             minor_diameter_mm=u.minor_diameter_mm or _um(u.pitch_diameter_mm - 2 * add),
-        ))
+        )))
+
+    #: What each defaultable dimension is, and what to change when its default breaks a rule.
+    _DERIVED_WORDS = {
+        "major_diameter_mm": ("{part} major diameter", "reduce thread.pitch_mm or give {part}.major_diameter_mm"),
+        "minor_diameter_mm": ("{part} minor (root) diameter",
+                              "reduce thread.pitch_mm, increase {part}.pitch_diameter_mm or give "
+                              "{part}.minor_diameter_mm"),
+        "length_mm": ("{part} threaded length", "reduce thread.pitch_mm or thread.engaged_teeth, or give "
+                                                "{part}.length_mm"),
+        "arc_radius_mm": ("{part} flank arc radius r_T", "reduce roller.pitch_diameter_mm or give "
+                                                        "roller.arc_radius_mm"),
+    }
+
+    def _derived(self, part: str, spec: Any, values: dict[str, Any]) -> Any:
+        """``spec`` with its defaulted dimensions filled in; a default that breaks the part's
+        own rule (e.g. a negative root diameter from a huge pitch) is reported under the full
+        field path, with the formula and the fields it came from, the part in words and what
+        to change."""
+        try:
+            return replace(spec, **values)
+        except DesignError as exc:
+            path = f"{part}.{exc.field}"
+            note = self.__dict__.get("_defaulted", {}).get(path)
+            if note is None:
+                raise exc.prefixed(part) from None
+            what, fix = self._DERIVED_WORDS.get(exc.field, ("{part} " + exc.field, "give " + path))
+            raise DesignError(path, exc.value, f"the {what.format(part=part)} {exc.rule}; "
+                                               f"{fix.format(part=part)}", note) from None
 
     # -- rules ----------------------------------------------------------------
     def normal_half_widths(self) -> dict[str, tuple[float, float]]:
@@ -709,55 +754,86 @@ class PRSDesign:
         for part, spec in (("screw", s), ("roller", r), ("nut", u)):
             if not spec.minor_diameter_mm < spec.pitch_diameter_mm < spec.major_diameter_mm:
                 raise self._error(f"{part}.pitch_diameter_mm", spec.pitch_diameter_mm,
-                                  f"must lie strictly between {part}.minor_diameter_mm "
+                                  f"the {part} pitch diameter must lie strictly between {part}.minor_diameter_mm "
                                   f"({spec.minor_diameter_mm}) and {part}.major_diameter_mm "
                                   f"({spec.major_diameter_mm})")
         if r.arc_radius_mm <= 0.5 * r.major_diameter_mm:
             raise self._error("roller.arc_radius_mm", r.arc_radius_mm,
-                              f"must exceed the roller crest radius "
-                              f"{0.5 * r.major_diameter_mm} (the flank arc is centred on the "
-                              f"roller axis)")
+                              f"the roller flank arc radius must exceed the roller crest radius "
+                              f"roller.major_diameter_mm / 2 = {0.5 * r.major_diameter_mm} mm (the flank arc "
+                              f"is centred on the roller axis): increase roller.arc_radius_mm or reduce "
+                              f"roller.major_diameter_mm")
         # Tooth and groove widths must stay positive over the whole flank height.
+        beta_txt = f"thread.flank_half_angle_deg = {self.thread.flank_half_angle_deg!r}"
         for part, (crest_w, root_w) in self.normal_half_widths().items():
+            spec = getattr(self, part)
+            starts = 1 if part == "roller" else spec.starts
+            lam = math.degrees(math.atan(starts * p / (math.pi * spec.pitch_diameter_mm)))
+            # the formulas of normal_half_widths with the fields they read
+            if part == "roller":
+                crest_f = "p cos(lambda) / 4 + sqrt(r_T^2 - r_major^2) - sqrt(r_T^2 - r_pitch^2)"
+                root_f = "p cos(lambda) / 4 - sqrt(r_T^2 - r_minor^2) + sqrt(r_T^2 - r_pitch^2)"
+                flank = f"r_T = roller.arc_radius_mm = {r.arc_radius_mm:.6g} mm"
+            else:
+                out_f, in_f = "tan(beta) (r_major - r_pitch)", "tan(beta) (r_pitch - r_minor)"
+                crest_f = "p cos(lambda) / 4 - " + (in_f if part == "nut" else out_f)
+                root_f = "p cos(lambda) / 4 - " + (out_f if part == "nut" else in_f)
+                flank = beta_txt
+            src = (f"thread.pitch_mm = {p!r}, lead angle lambda = atan({starts} p / (pi {part}.pitch_diameter_mm)) "
+                   f"= {lam:.4g} deg, {part}.pitch_diameter_mm = {spec.pitch_diameter_mm!r}, {part}.major_diameter_mm "
+                   f"= {spec.major_diameter_mm!r}, {part}.minor_diameter_mm = {spec.minor_diameter_mm!r}, {flank}")
             if crest_w <= 0.0:
                 fld = f"{part}.minor_diameter_mm" if part == "nut" else f"{part}.major_diameter_mm"
-                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
-                                  f"the tooth comes to a point below the crest (crest "
-                                  f"half-width {crest_w:.4g} mm): reduce the crest height")
+                raise self._error(fld, getattr(spec, fld.split(".")[1]),
+                                  f"the {part} tooth comes to a point below the crest: {part} tooth half-width "
+                                  f"at the crest = {crest_f} = {crest_w:.4g} mm with {src}; it must be > 0: "
+                                  f"reduce the crest height ({fld}) or increase thread.pitch_mm")
             if root_w <= 0.0:
                 fld = f"{part}.major_diameter_mm" if part == "nut" else f"{part}.minor_diameter_mm"
-                raise self._error(fld, getattr(getattr(self, part), fld.split(".")[1]),
-                                  f"the groove closes above the root (root half-width "
-                                  f"{root_w:.4g} mm): make the root shallower")
+                raise self._error(fld, getattr(spec, fld.split(".")[1]),
+                                  f"the {part} groove closes above the root: {part} groove half-width at the "
+                                  f"root = {root_f} = {root_w:.4g} mm with {src}; it must be > 0: make the root "
+                                  f"shallower ({fld}) or increase thread.pitch_mm")
         a = 0.5 * (s.pitch_diameter_mm + r.pitch_diameter_mm)
+        a_txt = (f"centre distance a = (screw.pitch_diameter_mm + roller.pitch_diameter_mm) / 2 = "
+                 f"({s.pitch_diameter_mm!r} + {r.pitch_diameter_mm!r}) / 2 = {a} mm")
         if 0.5 * s.major_diameter_mm + 0.5 * r.minor_diameter_mm >= a:
             raise self._error("screw.major_diameter_mm", s.major_diameter_mm,
-                              f"screw crest radius + roller root radius must be less than the "
-                              f"centre distance {a} mm (crest would hit the roller root)")
+                              f"screw crest radius + roller root radius = {0.5 * s.major_diameter_mm:.6g} + "
+                              f"{0.5 * r.minor_diameter_mm:.6g} mm must be less than the {a_txt} (crest would "
+                              f"hit the roller root): reduce screw.major_diameter_mm or roller.minor_diameter_mm")
         if 0.5 * r.major_diameter_mm + 0.5 * s.minor_diameter_mm >= a:
             raise self._error("roller.major_diameter_mm", r.major_diameter_mm,
-                              f"roller crest radius + screw root radius must be less than the "
-                              f"centre distance {a} mm (crest would hit the screw root)")
+                              f"roller crest radius + screw root radius = {0.5 * r.major_diameter_mm:.6g} + "
+                              f"{0.5 * s.minor_diameter_mm:.6g} mm must be less than the {a_txt} (crest would "
+                              f"hit the screw root): reduce roller.major_diameter_mm or screw.minor_diameter_mm")
         if a + 0.5 * r.major_diameter_mm >= 0.5 * u.major_diameter_mm:
             raise self._error("nut.major_diameter_mm", u.major_diameter_mm,
                               f"nut root radius must exceed centre distance + roller crest "
-                              f"radius = {a + 0.5 * r.major_diameter_mm} mm")
+                              f"radius = {a + 0.5 * r.major_diameter_mm} mm ({a_txt}, roller crest radius "
+                              f"roller.major_diameter_mm / 2 = {0.5 * r.major_diameter_mm:.6g} mm): increase "
+                              f"nut.major_diameter_mm or nut.pitch_diameter_mm")
         if a + 0.5 * r.minor_diameter_mm >= 0.5 * u.minor_diameter_mm:
             raise self._error("nut.minor_diameter_mm", u.minor_diameter_mm,
                               f"nut crest radius must exceed centre distance + roller root "
-                              f"radius = {a + 0.5 * r.minor_diameter_mm} mm")
+                              f"radius = {a + 0.5 * r.minor_diameter_mm} mm ({a_txt}, roller root radius "
+                              f"roller.minor_diameter_mm / 2 = {0.5 * r.minor_diameter_mm:.6g} mm): increase "
+                              f"nut.minor_diameter_mm or nut.pitch_diameter_mm")
         if u.outer_diameter_mm <= u.major_diameter_mm:
             raise self._error("nut.outer_diameter_mm", u.outer_diameter_mm,
-                              f"must exceed nut.major_diameter_mm ({u.major_diameter_mm})")
+                              f"the nut body must be thicker than its thread: must exceed nut.major_diameter_mm "
+                              f"({u.major_diameter_mm})")
         gap = 2.0 * a * math.sin(math.pi / r.count) if r.count > 1 else math.inf
         if gap <= r.major_diameter_mm:
             raise self._error("roller.count", r.count,
                               f"{r.count} rollers on a {a} mm centre radius overlap: roller "
-                              f"centre spacing {gap:.4g} mm must exceed the roller crest "
-                              f"diameter {r.major_diameter_mm} mm")
+                              f"centre spacing 2 a sin(pi / roller.count) = {gap:.4g} mm ({a_txt}) must exceed "
+                              f"the roller crest diameter roller.major_diameter_mm = {r.major_diameter_mm} mm: "
+                              f"use fewer rollers or a larger screw.pitch_diameter_mm")
         if s.length_mm < n * p:
             raise self._error("screw.length_mm", s.length_mm,
-                              f"must be at least the engaged length n p = {n * p} mm")
+                              f"must be at least the engaged length n p = {n * p} mm (thread.engaged_teeth "
+                              f"x thread.pitch_mm = {n} x {p!r})")
         tol = self.tolerances
         if tol is not None:
             for name in FLANK_FIELDS:

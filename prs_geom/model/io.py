@@ -110,6 +110,8 @@ FIELD_COMMENTS: dict[str, str] = {
     "rating.static_pressure_limit_mpa": "Hertz pressure of the static load rating (MPa)",
     "rating.preload_n": "double-nut preload (N); omit for design load / 2.83",
     "rating.dn_limit_mm_rpm": "nut speed limit as nominal diameter x speed (mm/min)",
+    "rating.required_static_safety": "smallest static safety s0 = C_0a / F_max the limit checks accept "
+                                     "(1 to 20; catalogue: 2 without, 5 with vibration or impact)",
     "kind": 'kind of design: "prs" (default) or another product line',
     "format_version": "design-file format version (files without it are version 1)",
 }

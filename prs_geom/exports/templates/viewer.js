@@ -191,8 +191,14 @@ function resize() {
 }
 window.addEventListener('resize', resize);
 resize();
+// counts as report.html prints numbers (prs_geom.exports.numbers): digit groups of three
+// from 10 000 up, separated by a narrow no-break space
+function grouped(n) {
+  const s = String(n);
+  return s.length < 5 ? s : s.replace(/\B(?=(\d{3})+(?!\d))/g, '\u202f');
+}
 document.getElementById('viewinfo').textContent =
-  nTri + ' triangles, display tolerance ' + data.tolerance_mm + ' mm; three.js ' + THREE.REVISION +
+  grouped(nTri) + ' triangles, display tolerance ' + data.tolerance_mm + ' mm; three.js ' + THREE.REVISION +
   ' (WebGL). Drag to rotate, wheel to zoom, right-drag to pan.';
 document.body.dataset.triangles = String(nTri);
 document.body.dataset.viewer = 'ok';
