@@ -70,24 +70,27 @@ def fingerprint(folder: Path) -> dict[str, Any]:
     return {"report": _strip_times(report), "files": files}
 
 
-def compare_numbers(a: Any, b: Any, path: str = "report", rtol: float = 1e-12) -> list[str]:
-    """Differences between two JSON values; numbers to ``rtol`` relative (absolute near 0)."""
+def compare_numbers(a: Any, b: Any, path: str = "report", rtol: float = 1e-12, atol: float = 1e-13) -> list[str]:
+    """Differences between two JSON values; numbers to ``rtol`` relative or ``atol``
+    absolute: a quantity that is zero up to rounding (a contact overlap of -7e-16 mm, a
+    sliding speed of 1e-36 mm/s) takes its last bits from the BLAS and numpy build, and
+    1e-13 (mm, um, N, ...) is far below every resolution the project states."""
     if isinstance(a, dict) and isinstance(b, dict):
         out = [f"{path}: key {k!r} only in the golden" for k in a.keys() - b.keys()]
         out += [f"{path}: key {k!r} only in the new report" for k in b.keys() - a.keys()]
         for k in a.keys() & b.keys():
-            out += compare_numbers(a[k], b[k], f"{path}.{k}", rtol)
+            out += compare_numbers(a[k], b[k], f"{path}.{k}", rtol, atol)
         return out
     if isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
             return [f"{path}: length {len(a)} != {len(b)}"]
         out = []
         for i, (x, y) in enumerate(zip(a, b)):
-            out += compare_numbers(x, y, f"{path}[{i}]", rtol)
+            out += compare_numbers(x, y, f"{path}[{i}]", rtol, atol)
         return out
     num = (int, float)
     if isinstance(a, num) and isinstance(b, num) and not isinstance(a, bool) and not isinstance(b, bool):
-        if a == b or abs(a - b) <= rtol * max(abs(a), abs(b), 1e-300):
+        if a == b or abs(a - b) <= max(rtol * max(abs(a), abs(b)), atol):
             return []
         return [f"{path}: {a!r} != {b!r}"]
     return [] if a == b else [f"{path}: {a!r} != {b!r}"]
