@@ -107,6 +107,13 @@ def cmd_validate(args: argparse.Namespace) -> int:
         # plausible ranges (probably a unit slip) and roller drift: warnings, exit 0
         for msg in design_warnings(design):
             print(f"warning: {msg}", file=sys.stderr)
+        from prs_geom.geometry.mechanism import check_layout, layout_warnings
+
+        # every rule of build that needs no meshing (exit 2 naming the field): the gear sizing,
+        # the mechanism layout with its standard tables (ISO 286, DIN 472), fits and stack-up;
+        # a failed fit or stack-up is a warning, as in build
+        for msg in layout_warnings(check_layout(design)):
+            print(f"warning: {msg}", file=sys.stderr)
         from prs_geom.pipeline import plan_build
 
         # the same estimate and worker plan as build (exit 2 when build would refuse it)
@@ -241,9 +248,8 @@ def cmd_loads(args: argparse.Namespace) -> int:
             raise exc.renamed("--load") from None
     design = _with_compliance(design, args)
     progress = args.progress
-    from prs_geom.pipeline import load_models
 
-    models = load_models(design, progress=progress)
+    models = _load_models(design, progress=progress)
     rep = loads_report(design, model=models.model, progress=progress)
     if args.json:
         _print_json(rep)
@@ -270,6 +276,16 @@ def cmd_loads(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _load_models(design: PRSDesign, contact=None, progress=silent):
+    """:func:`prs_geom.pipeline.load_models`, printing the FE cache's integrity warnings."""
+    from prs_geom.pipeline import load_models
+
+    models = load_models(design, contact, progress)
+    for msg in models.cache.warnings if models.cache is not None else ():
+        print(f"warning: {msg}", file=sys.stderr)
+    return models
+
+
 def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
     """The design with ``--compliance`` applied; the FE extra checked before any work."""
     if getattr(args, "compliance", None) is not None:
@@ -286,9 +302,8 @@ def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
 def _design_model(design: PRSDesign):
     """The load model of the design's ``loads.compliance`` (FE matrices from the cache)."""
     design = _with_compliance(design, argparse.Namespace())
-    from prs_geom.pipeline import load_models
 
-    return load_models(design).model
+    return _load_models(design).model
 
 
 def _print_model_risk(risk, models) -> None:
@@ -325,9 +340,8 @@ def cmd_rating(args: argparse.Namespace) -> int:
     case = rating_case(design, spectrum, args.mean_load, args.speed_rpm, args.life_hours, args.fw, args.reliability)
     contact = analyse_contact(design)
     design = _with_compliance(design, args)
-    from prs_geom.pipeline import load_models
 
-    model = load_models(design, contact).model           # the design's loads.compliance, as in build
+    model = _load_models(design, contact).model           # the design's loads.compliance, as in build
     robust, note = None, "needs a load spectrum (--spectrum FILE)"
     if spectrum is not None:
         from prs_geom import studies
@@ -405,24 +419,24 @@ def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
     """Target coefficients from .json / .toml ({nut_roller: [...], roller_screw: [...]}) or
     .csv (columns tooth, nut_roller, roller_screw)."""
     import csv
-    import json
-    import tomllib
 
+    from prs_geom.model.io import parse_document, read_input_text
+
+    # read within bounds (regular files only, size cap) and parsed under the input limits
+    # of prs_geom.model.io: errors are exit 2 naming "--target file" and the path
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise DesignError("--target", path, f"cannot be read: {exc.strerror}") from None
+    text = read_input_text(p, "--target file")
     try:
         if p.suffix.lower() == ".csv":
             rows = list(csv.DictReader(text.splitlines()))
             data = {k: [float(r[k]) for r in rows] for k in ("nut_roller", "roller_screw")}
-        elif p.suffix.lower() == ".json":
-            data = json.loads(text)
         else:
-            data = tomllib.loads(text)
-    except (ValueError, KeyError, TypeError, tomllib.TOMLDecodeError) as exc:
-        raise DesignError("--target", path, f"is not a valid target file: {exc}") from None
+            data = parse_document(text, path, "--target file", "json" if p.suffix.lower() == ".json" else "toml",
+                                  prefix="target")
+    except DesignError:
+        raise
+    except (ValueError, KeyError, TypeError, csv.Error) as exc:
+        raise DesignError.about_file(path, f"is not a valid target file: {str(exc)[:100]}", "--target file") from None
     out = []
     for key in ("nut_roller", "roller_screw"):
         v = data.get(key) if isinstance(data, dict) else None
@@ -451,9 +465,8 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
     if args.out:
         check_output_file(args.out, args.force)            # refuse before the work
     design = _with_compliance(design, args)
-    from prs_geom.pipeline import load_models
 
-    model = load_models(design, progress=args.progress).model
+    model = _load_models(design, progress=args.progress).model
     pd = design_pitches(design, t_nr, t_rs, model=model)
     new = with_pitch_lists(design, pd, name=args.name or f"{design.name}-graded")
     check = forward(new, model=model)
@@ -647,9 +660,8 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
     quantile = 0.95 if args.quantile is None else args.quantile
     samples = args.samples if args.samples is not None else 200
     design = _with_compliance(design, args)
-    from prs_geom.pipeline import load_models
 
-    model = load_models(design, progress=args.progress).model
+    model = _load_models(design, progress=args.progress).model
     res = studies.robust_pitch(design, spectrum, tols, quantile=quantile, samples=samples, seed=tols.seed, model=model,
                                execution=_execution(args, quiet=args.json),
                                name=args.name or f"{design.name}-robust")

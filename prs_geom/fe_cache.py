@@ -11,6 +11,11 @@ file per part, under a key derived from all of that:
   level and teeth, the source of :mod:`prs_geom.analysis.fe` and the versions of
   scikit-fem, numpy and scipy. A change of any of them is a new key, so an entry is never
   stale; the stored description is compared with the current one on reading as well.
+* Integrity: each file carries its key and a SHA-256 checksum of the key, the description
+  and every stored array's dtype, shape and bytes. An entry whose checksum or key does not
+  match (a matrix edited in place, a file copied under another name) is not trusted: it is
+  recomputed and replaced, with a warning (:attr:`CachedInfluence.warnings`). The files
+  are plain ``.npz`` read with ``allow_pickle=False``: no code can come from the cache.
 * Where: ``$PRS_GEOM_CACHE/fe`` if set, else ``$XDG_CACHE_HOME/prs-geom/fe``, else
   ``~/.cache/prs-geom/fe``. Nothing is written anywhere else; files are written to a
   temporary name in that folder and renamed into place, so a reader never sees half a
@@ -93,31 +98,55 @@ def part_key(section: Any, level: int, teeth: int, fingerprint: str | None = Non
     return hashlib.sha256((_description(section, level, teeth) + "|" + fp).encode()).hexdigest()
 
 
-def _read(path: Path, description: str):
-    """The PartInfluence stored at ``path``, or None when absent, unreadable or foreign."""
+def _checksum(key: str, description: str, arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 over the key, the description and each array's name, dtype, shape and bytes."""
+    h = hashlib.sha256()
+    h.update(key.encode())
+    h.update(description.encode())
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _stored_arrays(pi: Any, description: str) -> dict[str, np.ndarray]:
+    return {"description": np.array(description), "part": np.array(pi.part), "flanks": np.array(list(pi.flanks)),
+            "support_face": np.array(pi.support_face), **{k: np.asarray(getattr(pi, k)) for k in _ARRAYS},
+            **{k: np.array(getattr(pi, k)) for k in _SCALARS}}
+
+
+def _read(path: Path, description: str, key: str) -> tuple[Any, str]:
+    """``(PartInfluence, "hit")`` from ``path``, or ``(None, why)``: "absent", "foreign"
+    (another description: not ours to judge), "unreadable", or "tampered" (the stored key or
+    checksum does not match what the file holds)."""
     from prs_geom.analysis.fe.teeth import PartInfluence
 
     try:
         with np.load(path, allow_pickle=False) as z:
             if str(z["description"]) != description:
-                return None
-            kw: dict[str, Any] = {k: np.array(z[k]) for k in _ARRAYS}
+                return None, "foreign"
+            stored = {name: np.array(z[name]) for name in z.files if name not in ("key", "checksum")}
+            if "checksum" not in z.files or str(z["key"]) != key or \
+                    str(z["checksum"]) != _checksum(key, description, stored):
+                return None, "tampered"
+            kw: dict[str, Any] = {k: stored[k] for k in _ARRAYS}
             for k in _SCALARS:
-                kw[k] = z[k].item()
-            return PartInfluence(part=str(z["part"]), flanks=tuple(str(f) for f in z["flanks"]),
-                                 support_face=str(z["support_face"]), **kw)
+                kw[k] = stored[k].item()
+            return PartInfluence(part=str(stored["part"]), flanks=tuple(str(f) for f in stored["flanks"]),
+                                 support_face=str(stored["support_face"]), **kw), "hit"
     except FileNotFoundError:
-        return None
+        return None, "absent"
     except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError):
-        return None
+        return None, "unreadable"
 
 
-def _write(path: Path, pi: Any, description: str) -> bool:
-    """Store ``pi`` atomically at ``path``; False when the folder cannot be written."""
+def _write(path: Path, pi: Any, description: str, key: str) -> bool:
+    """Store ``pi`` atomically at ``path`` with its key and checksum; False when the folder
+    cannot be written."""
     buf = io.BytesIO()
-    np.savez(buf, description=np.array(description), part=np.array(pi.part), flanks=np.array(list(pi.flanks)),
-             support_face=np.array(pi.support_face), **{k: np.asarray(getattr(pi, k)) for k in _ARRAYS},
-             **{k: np.array(getattr(pi, k)) for k in _SCALARS})
+    arrays = _stored_arrays(pi, description)
+    np.savez(buf, key=np.array(key), checksum=np.array(_checksum(key, description, arrays)), **arrays)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         write_file_atomic(path, buf.getvalue())
@@ -144,6 +173,8 @@ class CachedInfluence:
         False when a computed matrix could not be written to the cache (it is used anyway).
     seconds : float
         Wall time of this call (reading or computing), s.
+    warnings : tuple of str
+        One line per cache entry that failed its integrity check and was recomputed.
     """
 
     influence: Any
@@ -152,11 +183,12 @@ class CachedInfluence:
     folder: Path
     stored: bool
     seconds: float
+    warnings: tuple[str, ...] = ()
 
     def report(self) -> dict[str, Any]:
         """The ``cache`` entry of report.json's FE summary."""
         return {"folder": str(self.folder), "read_from_cache": dict(self.hits), "keys": dict(self.keys),
-                "stored": self.stored, "seconds": self.seconds}
+                "stored": self.stored, "seconds": self.seconds, "warnings": list(self.warnings)}
 
 
 def cached_influence(design: Any, contact: Any = None, level: int | None = None, teeth: int | None = None,
@@ -174,18 +206,21 @@ def cached_influence(design: Any, contact: Any = None, level: int | None = None,
     folder = cache_dir() if folder is None else Path(folder)
     secs = part_sections(design, contact)
     fp = _code_fingerprint()
-    parts, hits, keys, stored = {}, {}, {}, True
+    parts, hits, keys, stored, warnings = {}, {}, {}, True, []
     progress("fe matrices", 0, 3)
     for i, name in enumerate(("screw", "roller", "nut")):
         desc = _description(secs[name], level, teeth)
         key = keys[name] = part_key(secs[name], level, teeth, fp)
         path = folder / f"{name}-{key[:32]}.npz"
-        pi = _read(path, desc)
+        pi, status = _read(path, desc, key)
         hits[name] = pi is not None
+        if status == "tampered":
+            warnings.append(f"the cached {name} influence matrix {path} does not match its checksum (changed "
+                            f"since prs-geom wrote it): not used; recomputed and replaced")
         if pi is None:
             pi = part_influence(secs[name], level, teeth)
-            stored = _write(path, pi, desc) and stored
+            stored = _write(path, pi, desc, key) and stored
         parts[name] = pi
         progress("fe matrices", i + 1, 3)
     return CachedInfluence(InfluenceMatrices(parts["screw"], parts["roller"], parts["nut"]), hits, keys, folder,
-                           stored, time.perf_counter() - t0)
+                           stored, time.perf_counter() - t0, tuple(warnings))

@@ -337,6 +337,8 @@ def stage_loads(ctx: BuildContext) -> None:
                                       compare=models.compare)
     rep = loads.report()
     ctx.report["loads"] = rep
+    if models.cache is not None:
+        ctx.report["warnings"] += list(models.cache.warnings)
     if models.cache is not None and not models.cache.stored:
         ctx.report["warnings"].append(f"the finite-element influence matrices could not be stored in "
                                       f"{models.cache.folder} (they were computed and used; set "
@@ -770,17 +772,34 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
     workers = None
     if not harmonic:
+        from prs_geom.geometry.mechanism import check_layout
+
+        check_layout(design)   # the standard tables, fits and stack-up: refused now, not after the meshing
         if options is not None and options.step:
             from prs_geom.exports.step import require_ocp
 
             require_ocp()   # a missing extra is known now, not after the meshing
         workers, _ = plan_build(design, memory_budget)
+    from prs_geom.mesh.budget import ResourceLimitError, default_budget_bytes
+    from prs_geom.memwatch import MemoryWatch
+
+    # the budget holds while the build runs, too (prs_geom.memwatch): exit 3, nothing written
+    watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,
+                        f"the build of {design.name}")
     try:
-        with atomic as tmp:
+        with watch, atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,
                              workers=workers)
             ctx.report["files"].append(REPORT_NAME)
             (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+    except ResourceLimitError:
+        raise
     except OSError as exc:
+        if watch.breached:
+            raise watch.error() from None
         raise _environment_failure(exc, atomic) from exc
+    except BaseException:
+        if watch.breached:   # a worker killed for the budget, met as a broken pool
+            raise watch.error() from None
+        raise
     return ctx.report

@@ -309,6 +309,29 @@ def _run_joblib(task: Callable[[Any], Any], payloads: list[Any], n_jobs: int,
     return out
 
 
+class _children_ignore_interrupts:
+    """SIGINT and SIGTERM ignored in this process while a local Dask cluster starts, so that
+    its nanny and worker processes inherit the ignored signals: a Ctrl-C to the process group
+    then reaches only this process, which closes the cluster, instead of a hundred lines of
+    tracebacks from the cluster's processes. A Ctrl-C during those one or two seconds of
+    start-up is lost (press it again); outside the main thread nothing changes."""
+
+    def __enter__(self) -> None:
+        import signal
+        import threading
+
+        self._previous: dict[Any, Any] = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._previous[sig] = signal.signal(sig, signal.SIG_IGN)
+
+    def __exit__(self, *exc: object) -> None:
+        import signal
+
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+
+
 def local_cluster_options(n_workers: int) -> dict[str, Any]:
     """Keyword arguments of the ``distributed.LocalCluster`` that ``scheduler="local"`` starts:
     ``n_workers`` processes of one thread each (one chunk at a time per process, like the
@@ -339,11 +362,14 @@ def _run_dask(task: Callable[[Any], Any], payloads: list[Any], backend: Backend,
               tick: Callable[[int], None]) -> list[Any]:
     distributed = _import_distributed()
     owned: list[Any] = []   # what this call opened and must close, last opened first
+    quiet = logging.getLogger("distributed")
+    level = quiet.level
     try:
         if backend.scheduler == "client":
             client = scheduler
         elif backend.scheduler == "local":
-            cluster = distributed.LocalCluster(**local_cluster_options(backend.workers or 1))
+            with _children_ignore_interrupts():
+                cluster = distributed.LocalCluster(**local_cluster_options(backend.workers or 1))
             owned.append(cluster)
             client = distributed.Client(cluster, set_as_default=False)
             owned.append(client)
@@ -365,9 +391,16 @@ def _run_dask(task: Callable[[Any], Any], payloads: list[Any], backend: Backend,
                 out[i] = result
                 tick(i)
         except BaseException:
+            # an error or an interrupt: the command prints one line for it; the cluster's
+            # complaints about work cut off while closing (CRITICAL "lost data" logs) are
+            # not the user's business
+            quiet.setLevel(logging.CRITICAL + 1)
             client.cancel(futures)
             raise
         return out
     finally:
-        for obj in reversed(owned):
-            obj.close()
+        try:
+            for obj in reversed(owned):
+                obj.close()
+        finally:
+            quiet.setLevel(level)

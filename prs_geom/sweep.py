@@ -183,15 +183,18 @@ class SweepResult:
     def csv_text(self) -> str:
         """The table as CSV text: a header of the column names (which carry the units), then one
         line per point; floats at full float64 precision (repr), empty cells where a point
-        has no number."""
+        has no number; text (statuses, reasons, warnings) never begins a spreadsheet formula
+        (:func:`prs_geom.exports.textsafe.csv_field`)."""
         import csv
         import io
+
+        from prs_geom.exports.textsafe import csv_field
 
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
         w.writerow([c.name for c in self.columns])
         for row in self.table:
-            w.writerow(["" if v is None else repr(v) if isinstance(v, float) else v for v in row])
+            w.writerow(["" if v is None else repr(v) if isinstance(v, float) else csv_field(v) for v in row])
         return buf.getvalue()
 
 

@@ -122,7 +122,7 @@ def test_rating_required_static_safety_from_the_design(tmp_path):
 # --------------------------------------------------------------------------- validate
 def test_validate_warns_on_implausible_values_and_exits_0(tmp_path):
     f = tmp_path / "d.toml"
-    f.write_text("[thread]\npitch_mm = 0.05\n[loading]\naxial_load_n = 2e6\n[rating]\nspeed_rpm = 30000\n",
+    f.write_text("[thread]\npitch_mm = 0.05\n[gears]\nenabled = false\n[loading]\naxial_load_n = 2e6\n[rating]\nspeed_rpm = 30000\n",
                  encoding="utf-8")
     code, out, err = run(["validate", str(f)])
     assert code == 0, err

@@ -104,6 +104,30 @@ def test_damaged_or_foreign_entries_are_recomputed(design, tmp_path):
     assert _get(design, folder).hits["screw"] is False
 
 
+def test_a_tampered_matrix_is_detected_and_recomputed(design, tmp_path):
+    """Issue 29: an influence matrix multiplied by 1000 in the cache file (its key and
+    description left as they were) fails the checksum: recomputed, replaced, warned."""
+    folder = tmp_path / "cache"
+    base = _get(design, folder)
+    path = folder / f"roller-{base.keys['roller'][:32]}.npz"
+    with np.load(path, allow_pickle=False) as z:
+        stored = {k: np.array(z[k]) for k in z.files}
+    stored["matrix"] = stored["matrix"] * 1000.0
+    np.savez(path, **stored)
+    r = _get(design, folder)
+    assert r.hits == {"screw": True, "roller": False, "nut": True}
+    assert len(r.warnings) == 1 and "roller influence matrix" in r.warnings[0] and "checksum" in r.warnings[0]
+    np.testing.assert_array_equal(r.influence.roller.matrix, base.influence.roller.matrix)
+    # the entry was rewritten and reads clean again
+    again = _get(design, folder)
+    assert again.hits["roller"] is True and again.warnings == ()
+    # an entry of the old format (no checksum) is not trusted either
+    with np.load(path, allow_pickle=False) as z:
+        old = {k: np.array(z[k]) for k in z.files if k not in ("key", "checksum")}
+    np.savez(path, **old)
+    assert _get(design, folder).hits["roller"] is False
+
+
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="needs a read-only folder (not root)")
 def test_unwritable_cache_still_gives_the_matrices(design, tmp_path):
     folder = tmp_path / "ro"

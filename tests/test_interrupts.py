@@ -147,3 +147,84 @@ def test_ctrl_c_in_a_plain_script_using_the_api_cleans_up(tmp_path):
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
+    return {str(p.relative_to(folder)): (p.stat().st_size, p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("command", ["build", "tolerance", "tolerance-dask"])
+def test_sigkill_of_the_main_process_leaves_no_worker_running_or_writing(tmp_path, command):
+    """Issue 29: SIGKILL of the main process (what the out-of-memory killer sends) mid-build
+    and mid-tolerance study: every worker notices its parent is gone and exits at once
+    (parent watch), so soon after no child remains and nothing is written any more."""
+    design_file = tmp_path / "small.toml"
+    save_design(SMALL, design_file)
+    exe = Path(sys.executable).parent / "prs-geom"
+    env = {k: v for k, v in os.environ.items() if k != "PRS_GEOM_WORKERS"}
+    env["TMPDIR"] = str(tmp_path)
+    argv = [str(exe), "build", str(design_file), "--out", str(tmp_path / "out"), "--memory-budget", "4G"] \
+        if command == "build" else \
+        [str(exe), "tolerance", str(design_file), "--flank-um", "1", "--samples", "200000",
+         *(["--dask-workers", "2"] if command == "tolerance-dask" else ["--workers", "2"])]
+    # loky workers, or the processes of a local Dask cluster (multiprocessing spawn)
+    worker_mark = "spawn_main" if command == "tolerance-dask" else "popen_loky"
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+                            preexec_fn=os.setsid, cwd=tmp_path)
+    try:
+        t0 = time.monotonic()
+        while not any(worker_mark in r for r in _group_alive(proc.pid)):
+            assert proc.poll() is None, "the command ended before its workers started"
+            assert time.monotonic() - t0 < 120
+            time.sleep(0.05)
+        time.sleep(1.0)   # the workers at work
+        workers = [r for r in _group_alive(proc.pid) if worker_mark in r]
+        assert workers
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait()
+        t0 = time.monotonic()
+        while _group_alive(proc.pid) and time.monotonic() - t0 < 30:
+            time.sleep(0.2)
+        assert _group_alive(proc.pid) == [], "left running after SIGKILL"
+        before = _snapshot(tmp_path)
+        time.sleep(2.0)
+        assert _snapshot(tmp_path) == before, "something was written after the main process died"
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
+@pytest.mark.parametrize("where", [["--workers", "2"]])
+def test_ctrl_c_to_a_study_prints_one_line(tmp_path, where):
+    """Issue 29: a Ctrl-C (SIGINT to the process group) during a tolerance study on loky:
+    exit 130 and the one line, no tracebacks from the workers."""
+    exe = Path(sys.executable).parent / "prs-geom"
+    env = {k: v for k, v in os.environ.items() if k != "PRS_GEOM_WORKERS"}
+
+    def child_setup() -> None:
+        os.setsid()
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    proc = subprocess.Popen([str(exe), "tolerance", "--flank-um", "1", "--samples", "200000", *where, "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=child_setup, cwd=tmp_path)
+    # loky: two workers; Dask: two nannies and their two workers, and a Ctrl-C while the
+    # cluster starts is lost by design (scaleout._children_ignore_interrupts): wait for all
+    mark = "spawn_main" if where[0] == "--dask-workers" else "popen_loky"
+    need = 4 if where[0] == "--dask-workers" else 2
+    try:
+        t0 = time.monotonic()
+        while sum(mark in r for r in _group_alive(proc.pid)) < need:
+            assert proc.poll() is None and time.monotonic() - t0 < 120
+            time.sleep(0.05)
+        time.sleep(2.0)
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+        assert proc.returncode == 130 and err.splitlines() == ["interrupted"], err[-3000:]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()

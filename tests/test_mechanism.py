@@ -113,10 +113,83 @@ def test_mesh_volumes_agree_with_closed_forms(placed):
 def test_layout_errors_name_the_field():
     with pytest.raises(DesignError, match="mechanism.journal_diameter_mm"):
         layout(PRSDesign(mechanism=default_design().mechanism.__class__(journal_diameter_mm=7.5)))
-    with pytest.raises(DesignError, match="mechanism.ring_bore_mm"):
-        layout(PRSDesign(mechanism=default_design().mechanism.__class__(ring_bore_mm=59.0)))
+    # a bore DIN 472 does not hold is refused by the section itself (issue 29: the table look-up
+    # of a value given alone belongs to the design's own validation)
+    with pytest.raises(DesignError, match=r"ring_bore_mm = 59.0: must be a DIN 472 bore size: .*nearest sizes: 58, 60"):
+        default_design().mechanism.__class__(ring_bore_mm=59.0)
     with pytest.raises(DesignError, match="journal_fit"):
         default_design().mechanism.__class__(journal_fit="H7/x6")
+
+
+def _thread(**kw):
+    from prs_geom.model.design import Thread
+    return Thread(**kw)
+
+
+def test_a_stack_up_beyond_iso_286_is_refused_naming_the_table_and_its_range():
+    """Issue 29: engaged_teeth = 500 (nut length 1023.9 mm) passed validation and crashed the
+    build after the meshing (ISO 286 ends at 500 mm). Now the layout refuses it, naming the
+    field that drives the length, the table, its range, the value and the largest tooth count
+    that fits; one tooth fewer than that fits."""
+    from prs_geom.geometry.mechanism import check_layout
+
+    with pytest.raises(DesignError) as err:
+        check_layout(PRSDesign(thread=_thread(engaged_teeth=500)))
+    msg = str(err.value)
+    assert msg.startswith("thread.engaged_teeth = 500: the nut length")
+    assert "1023.9 mm" in msg and "ISO 286" in msg and "up to and including 500 mm" in msg
+    assert "reduce thread.engaged_teeth to at most 238" in msg and "mechanism.enabled = false" in msg
+    lay = check_layout(PRSDesign(thread=_thread(engaged_teeth=238)))
+    assert lay.stack.dimensions[0].nominal_mm <= 500.0
+    with pytest.raises(DesignError, match="thread.engaged_teeth = 239"):
+        check_layout(PRSDesign(thread=_thread(engaged_teeth=239)))
+    # the gear faces drive it: named, not the teeth
+    from prs_geom.model.design import GearSettings
+    with pytest.raises(DesignError, match=r"^gears.face_width_mm = 300.0: .*621.9 mm.*500 mm"):
+        check_layout(PRSDesign(thread=_thread(engaged_teeth=3), gears=GearSettings(face_width_mm=300.0)))
+    # without a mechanism there is no stack-up: the design is fine (the gears are still sized)
+    from prs_geom.model.design import MechanismSettings
+    assert check_layout(PRSDesign(thread=_thread(engaged_teeth=500),
+                                  mechanism=MechanismSettings(enabled=False))) is None
+
+
+def test_values_given_alone_are_looked_up_at_construction():
+    from prs_geom.model.design import MechanismSettings
+    with pytest.raises(DesignError, match=r"^journal_diameter_mm = 600.0: the journal fit H7/g6 .*500 mm"):
+        MechanismSettings(journal_diameter_mm=600.0)
+    with pytest.raises(DesignError, match=r"^carrier_thickness_mm = 501.0: the stack-up zone js11 .*500 mm"):
+        MechanismSettings(carrier_thickness_mm=501.0)
+    with pytest.raises(DesignError, match=r"DIN 472 .*8-200 mm"):
+        MechanismSettings(ring_bore_mm=250.0)
+    assert MechanismSettings(ring_bore_mm=60.0).ring_bore_mm == 60.0
+
+
+def test_a_carrier_beyond_din_472_names_the_table_range():
+    # pitch diameters 400/100/600 mm: the carriers need a bore far beyond DIN 472's 200 mm
+    d = PRSDesign(screw=Screw(pitch_diameter_mm=400.0, starts=5), roller=Roller(pitch_diameter_mm=100.0, count=10),
+                  nut=Nut(pitch_diameter_mm=600.0, starts=5, outer_diameter_mm=700.0))
+    from prs_geom.geometry.mechanism import check_layout
+    with pytest.raises(DesignError, match=r"^mechanism.ring_bore_mm = \(not set\): no DIN 472 ring takes a carrier "
+                                          r"of 617 mm .*tabulated for bores of 8 to 200 mm"):
+        check_layout(d)
+
+
+def test_validate_and_build_refuse_up_front(tmp_path):
+    """The CLI: validate says exit 2 with the table's range; build refuses before any work
+    (no output folder) instead of an internal error after the meshing."""
+    from cli_helpers import run
+    f = tmp_path / "d.toml"
+    f.write_text("[thread]\nengaged_teeth = 500\n")
+    code, out, err = run(["validate", str(f)])
+    assert code == 2 and err.startswith("error: thread.engaged_teeth = 500") and "500 mm" in err
+    assert "Traceback" not in err and out == ""
+    code, _, err = run(["build", str(f), "--out", str(tmp_path / "out"), "--quiet"])
+    assert code == 2 and "ISO 286" in err
+    assert not (tmp_path / "out").exists()
+    # a design whose stack-up has no play at worst case: valid, with the build's warning
+    f.write_text("[thread]\nengaged_teeth = 238\n")
+    code, out, err = run(["validate", str(f)])
+    assert code == 0 and "warning: mechanism: the axial stack-up" in err and "is valid" in out
 
 
 @pytest.fixture(scope="module")

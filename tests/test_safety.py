@@ -284,9 +284,10 @@ def test_estimate_matches_built_meshes_and_bounds_memory():
         for part in ("screw", "roller", "nut"):
             actual = len(build_part(d, part).faces)
             assert abs(est[part] - actual) <= 0.03 * actual, (part, est[part], actual)
-    # the default build peaks at about 370 MB (measured with ru_maxrss); the estimate bounds it
+    # the default serial build peaks at about 536 MB (its process tree, sampled by
+    # benchmarks/bench_memory.py); the estimate bounds it, within a factor 2
     e = estimate(PRSDesign())
-    assert 370 * 2 ** 20 <= e.peak_bytes <= 2 * 370 * 2 ** 20
+    assert 536 * 2 ** 20 <= e.peak_bytes <= 2 * 536 * 2 ** 20
     # with two worker processes the check meshes beside the export meshing: the peaks add,
     # and each worker has its own interpreter and libraries
     from prs_geom.mesh import budget
@@ -294,8 +295,9 @@ def test_estimate_matches_built_meshes_and_bounds_memory():
     p = budget.estimate(PRSDesign(), workers=2)
     export_peak = e.export_triangles * budget.BYTES_PER_EXPORT_TRIANGLE + e.placed_triangles * budget.BYTES_PER_PLACED_TRIANGLE
     check_peak = e.check_triangles * budget.BYTES_PER_CHECK_TRIANGLE
-    assert p.peak_bytes == pytest.approx(3 * budget.BASE_BYTES + export_peak + check_peak, rel=1e-12)
-    assert e.peak_bytes == pytest.approx(budget.BASE_BYTES + max(export_peak, check_peak), rel=1e-12)
+    m = budget.WORK_MARGIN
+    assert p.peak_bytes == pytest.approx(3 * budget.BASE_BYTES + m * (export_peak + check_peak), rel=1e-12)
+    assert e.peak_bytes == pytest.approx(budget.BASE_BYTES + m * max(export_peak, check_peak), rel=1e-12)
 
 
 # --------------------------------------------------------------------------- messages
@@ -511,3 +513,53 @@ def test_a_design_file_in_a_folder_of_its_own_becomes_that_folders_build(tmp_pat
     before = tree(proj)
     code, _, err = run(["build", str(design), "--out", str(proj), "--quiet", *BUDGET])
     assert code == 2 and "notes.txt" in err and tree(proj) == before
+
+
+# --------------------------------------------------------------------------- issue 29
+def test_a_dangling_symlink_as_out_is_refused_and_not_followed(tmp_path, tiny_file):
+    link = tmp_path / "out"
+    target = tmp_path / "elsewhere" / "made-by-following"
+    link.symlink_to(target)
+    code, _, err = run(["build", str(tiny_file), "--out", str(link), "--quiet", *BUDGET])
+    assert code == 2 and "dangling symbolic link" in err
+    assert link.is_symlink() and not (tmp_path / "elsewhere").exists()
+
+
+def test_a_build_over_its_budget_at_run_time_is_stopped_with_exit_3_and_no_output(tmp_path):
+    """The runtime guard (prs_geom.memwatch): a build whose real need exceeds the budget,
+    here because the up-front estimate is bypassed, is stopped before it passes the budget
+    by much: ResourceLimitError (exit 3 on the command line), no output, no worker left."""
+    script = tmp_path / "over.py"
+    out = tmp_path / "out"
+    script.write_text(
+        "import sys\n"
+        "import prs_geom as pg\n"
+        "import prs_geom.pipeline as pipeline\n"
+        "from prs_geom.mesh.budget import ResourceLimitError, parse_size\n"
+        "from prs_geom.memwatch import process_tree_rss\n"
+        "pipeline.plan_build = lambda design, budget=None: (2, None)   # the estimate bypassed\n"
+        "base = process_tree_rss()[0]\n"
+        "budget = base + parse_size('120M')\n"
+        "try:\n"
+        f"    pg.build(pg.default_design(), {str(out)!r}, memory_budget=budget)\n"
+        "except ResourceLimitError as exc:\n"
+        "    print('STOPPED', budget, exc)\n"
+        "    sys.exit(3)\n"
+        "print('BUILT')\n")
+    env = {k: v for k, v in os.environ.items() if k != "PRS_GEOM_WORKERS"}
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, env=env, timeout=600)
+    assert r.returncode == 3, (r.stdout, r.stderr[-2000:])
+    assert "was stopped: its resident memory reached" in r.stdout and "Nothing was written" in r.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["over.py"]
+
+
+def test_cli_maps_the_runtime_stop_to_exit_3(tmp_path, tiny_file, monkeypatch):
+    import prs_geom.pipeline as pipeline
+    from prs_geom.mesh.budget import ResourceLimitError
+
+    def stopped(*a, **k):
+        raise ResourceLimitError("the build of tiny was stopped: its resident memory reached ...")
+
+    monkeypatch.setattr(pipeline, "run_stages", stopped)
+    code, _, err = run(["build", str(tiny_file), "--out", str(tmp_path / "o"), *BUDGET])
+    assert code == 3 and "was stopped" in err and not (tmp_path / "o").exists()

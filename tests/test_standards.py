@@ -287,11 +287,40 @@ def test_ring_validation():
 
 
 def test_module_is_pure_data():
-    # no I/O and no heavy imports: the module imports only the standard library
+    # no I/O and no heavy imports: the module imports only the standard library and the error
+    # types of the model (its look-ups raise design errors, issue 29)
     import ast
     import inspect
     tree = ast.parse(inspect.getsource(st))
     imported = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-    imported |= {n.module.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
-    assert imported <= {"__future__", "math", "re", "bisect", "dataclasses", "numpy"}
+    imported |= {n.module if n.module.startswith("prs_geom") else n.module.split(".")[0]
+                 for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
+    assert imported <= {"__future__", "math", "re", "bisect", "dataclasses", "typing", "numpy",
+                        "prs_geom.model.errors"}
     assert "open(" not in inspect.getsource(st)
+
+
+def test_every_lookup_outside_the_tables_is_a_design_error():
+    """Issue 29: a look-up that leaves a table raises a design error (exit code 2) that names
+    the table's range and the value, never a bare ValueError, KeyError or IndexError."""
+    from prs_geom.model.errors import DesignError
+
+    cases = [(lambda: st.tolerance_zone(1023.9, "js11"), ["1023.9", "500 mm"]),
+             (lambda: st.size_range_index(0), ["over 0 up to and including 500 mm"]),
+             (lambda: st.it_tolerance_um(14, 10), ["IT14", "IT5..IT13"]),
+             (lambda: st.it_tolerance_um(7, 600), ["600", "500 mm"]),
+             (lambda: st.Fit.parse("H7/g6").limits(501), ["501", "500 mm"]),
+             (lambda: st.Fit.parse("H7"), ["'H7'"]),
+             (lambda: st.Fit("g6", "H7"), ["hole comes first"]),
+             (lambda: st.tolerance_zone(10, "x6"), ["'x6'"]),
+             (lambda: st.din472_ring(250), ["250", "8-200 mm"]),
+             (lambda: st.din472_ring(float("inf")), ["inf"])]
+    for call, needles in cases:
+        with pytest.raises(st.StandardTableError) as err:
+            call()
+        assert isinstance(err.value, DesignError) and isinstance(err.value, ValueError)
+        assert all(n in str(err.value) for n in needles), (str(err.value), needles)
+        assert err.value.table in (st.ISO286_TABLE, st.DIN472_TABLE)
+    with pytest.raises(st.StandardTableError) as err:
+        st.tolerance_zone(600, "H7")
+    assert (err.value.lo, err.value.hi, err.value.value) == (0.0, 500.0, 600)

@@ -86,7 +86,8 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
            "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
-           "model_risk", "MODEL_RISK_FRACTIONS"]
+           "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
+           "check_load_scale"]
 
 
 # --------------------------------------------------------------------------- Hertz
@@ -157,9 +158,70 @@ def _section_areas(design: PRSDesign) -> dict[str, float]:
     }
 
 
+#: Smallest mean elastic approach (mm) of a tooth contact at the design load: 1 nm. Below it
+#: the load is not one the model describes: ground flanks are a hundred times rougher than
+#: that (the smooth-surface Hertz law no longer holds), a micrometre of pitch error decides
+#: the sharing alone, and the tooth-load Newton system loses its conditioning (at about
+#: 0.1 nm on the standard design).
+MIN_MEAN_APPROACH_MM = 1e-6
+#: Largest ratio of the gaps a design's own pitch lists open between the teeth to the mean
+#: elastic approach at the design load: beyond it the first teeth carry the load alone (the
+#: pitch lists belong to another load) and the solver loses its conditioning (a 2 % pitch
+#: step at 10 N on the standard design, about 900 times).
+MAX_GAP_TO_APPROACH = 200.0
+
+
+def mean_approach_mm(model: LoadModel, load_n: float) -> float:
+    """Axial approach (mm) of a tooth contact carrying the mean share load / (n z) of
+    ``load_n`` (N): Hertz plus tooth deflection, the larger of the two contacts."""
+    f = load_n / (model.n * model.z)
+    return float(max(model.deflection("nr", f), model.deflection("rs", f)))
+
+
+def check_load_scale(design: PRSDesign, model: LoadModel | None = None, load_n: float | None = None,
+                     field: str = "loading.axial_load_n", value: Any = None,
+                     gaps: Sequence[tuple[NDArray, NDArray]] | None = None, min_approach: bool = True) -> float:
+    """Raise :class:`DesignError` on ``field`` (shown with ``value``, default the load) when
+    the load (N, default the design load) is too small for the load model: a mean tooth
+    approach below :data:`MIN_MEAN_APPROACH_MM` (unless ``min_approach`` is false), or pitch
+    gaps opening more than :data:`MAX_GAP_TO_APPROACH` times that approach. ``gaps``: the
+    (g_nr, g_rs) gap pairs solved at this load (any leading batch axes; default the design's
+    own pitch lists). Returns the mean approach (mm). The message says the load that would
+    do (the approach grows at least as F^(2/3))."""
+    model = model if model is not None else build_model(design)
+    F = design.loading.axial_load_n if load_n is None else float(load_n)
+    d = mean_approach_mm(model, F)
+    gap = 0.0
+    for g_nr, g_rs in (gaps if gaps is not None else [gap_terms(design)]):
+        for g in (g_nr, g_rs):
+            g = np.asarray(g, dtype=np.float64)
+            if g.size:
+                gap = max(gap, float(np.ptp(g, axis=-1).max()))
+    need_gap = gap / MAX_GAP_TO_APPROACH
+    need = max(MIN_MEAN_APPROACH_MM if min_approach else 0.0, need_gap)
+    if math.isfinite(d) and d >= need and d > 0.0:
+        return d
+    # D(k F) >= k^(2/3) D(F) for k >= 1, so this load reaches the approach needed
+    F_need = F * (need / d) ** 1.5 if d > 0 and math.isfinite(d) else math.inf
+    shown = F if value is None else value
+    if need_gap >= need and need_gap > 0.0:
+        why = (f"the pitch lists open gaps of up to {gap * 1e3:.4g} um between the teeth, "
+               f"{gap / d if d > 0 else math.inf:.3g} times the mean elastic approach of a tooth contact at "
+               f"{F:.6g} N ({d * 1e3:.3g} um; more than {MAX_GAP_TO_APPROACH:g} times): the first teeth would carry "
+               f"the load alone and the load model loses its conditioning; design the pitch lists for this load "
+               f"(prs-geom design-pitch) or increase {field} to at least {F_need:.3g} N")
+    else:
+        why = (f"a tooth contact deflects by {d * 1e6:.3g} nm on average at {F:.6g} N, below the "
+               f"{MIN_MEAN_APPROACH_MM * 1e6:g} nm the load model resolves (ground flanks are a hundred times "
+               f"rougher, and a micrometre of pitch error would decide the load sharing alone): increase {field} "
+               f"to at least {F_need:.3g} N")
+    raise DesignError(field, shown, why)
+
+
 def build_model(design: PRSDesign, contact: ContactResult | None = None) -> LoadModel:
     """Compliances of a design, with the contact geometry of the contact stage (solved here
-    when ``contact`` is not given)."""
+    when ``contact`` is not given). The design load must suit the model
+    (:func:`check_load_scale`, a :class:`DesignError` on ``loading.axial_load_n`` if not)."""
     contact = contact if contact is not None else analyse_contact(design)
     prof = ThreadProfiles.from_design(design)
     mats = design.materials
@@ -200,6 +262,18 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
         b = 2.0 * float(profile.tooth_half_width(r_c))
         c = abs(r_c - profile.root_radius)
         a = b + 2.0 * c * math.tan(beta)
+        if not 0.0 < b <= a < 2.0 * p:
+            # Yamamoto's terms take log(a / b) and log(P - a / 2) (issue 29: a math domain error,
+            # exit 70). It fails when the contact lies off the tooth: the roller's flank arc touches
+            # a straight flank at a roller radius of about r_T sin(beta), so the arc radius moves it
+            r_t = design.roller.arc_radius_mm
+            raise DesignError("roller.arc_radius_mm", r_t,
+                              f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
+                              f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
+                              f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
+                              f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
+                              f"roller.arc_radius_mm nearer r_r / sin(beta) = "
+                              f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
         mat = getattr(mats, part)
         terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
                                     mat.poisson_ratio,
@@ -215,7 +289,7 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
     t_n, d_n = tooth("nut", c_nr.part_radius_mm, width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
     A = _section_areas(design)
     inst = design.loading.installation
-    return LoadModel(
+    model = LoadModel(
         n=design.thread.engaged_teeth, z=z, pitch=p,
         sign_screw=1 if inst == "tension-compression" else -1,
         hertz_nr=hertz_nr, hertz_rs=hertz_rs, tooth_nr=t_nr_r + t_n, tooth_rs=t_rs_r + t_s,
@@ -227,6 +301,8 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
                  "tooth_screw": d_s, "tooth_roller_screw_side": d_rs_r,
                  "tooth_roller_nut_side": d_nr_r, "tooth_nut": d_n, "section_areas_mm2": A},
     )
+    check_load_scale(design, model)
+    return model
 
 
 

@@ -204,7 +204,9 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
     else:
         tol_text = f"per flank from the design's [tolerances]: {tol.source}"
         if tol.target_ldc is not None:
-            tol_text += f" (target worst LDC {tol.target_ldc:g}, confidence {tol.confidence:g}, seed {tol.seed})"
+            # a design file may state the target without the confidence (issue 29: that was exit 70)
+            conf = f", confidence {tol.confidence:g}" if tol.confidence is not None else ""
+            tol_text += f" (target worst LDC {tol.target_ldc:g}{conf}, seed {tol.seed})"
     alpha = getattr(design.materials, part).thermal_expansion_per_k
     mark = datum_mark(prof, 0.0, 0.5 * design.nut.outer_diameter_mm if prof.internal else None)
     header = {

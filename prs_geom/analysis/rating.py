@@ -79,11 +79,12 @@ from numpy.typing import NDArray
 from scipy.interpolate import PchipInterpolator
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
-from prs_geom.analysis.loads import (LoadModel, build_model, design_pitches, hertz_constant, pitch_gaps,
-                                     solve_loads_batch)
-from prs_geom.model.design import PRSDesign, RatingSettings, Supports
+from prs_geom.analysis.loads import (LoadModel, build_model, check_load_scale, design_pitches, hertz_constant,
+                                     pitch_gaps, solve_loads_batch)
+from prs_geom.model.design import LIFE_RANGE_HOURS, SPEED_RANGE_RPM, PRSDesign, RatingSettings, Supports
 from prs_geom.model.errors import DesignError
 from prs_geom.model.spectrum import Spectrum
+from prs_geom.model.validation import LOAD_RANGE_N
 
 __all__ = ["LP_C", "LP_H", "WEIBULL_E", "LP_BALL_CONSTANT", "A1_TABLE", "END_CASES", "STEEL_DENSITY_T_PER_MM3",
            "reliability_factor", "equivalent_load", "life_revolutions", "life_hours", "required_dynamic_load",
@@ -503,6 +504,19 @@ def limit_warnings(checks: Sequence[dict[str, Any]]) -> list[str]:
 
 
 # --------------------------------------------------------------------------- the analysis
+def _finite(value: Any, field: str, field_value: Any, rule: str) -> float:
+    """``value`` (or what the callable ``value`` returns) when it is a finite number > 0, else
+    a :class:`DesignError` on ``field``: a guard (the design bounds keep every rating finite;
+    an overflow, an underflow to 0 or a division by zero names the field if not)."""
+    try:
+        v = float(value() if callable(value) else value)
+    except (OverflowError, ZeroDivisionError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and v > 0.0):
+        raise DesignError(field, field_value, rule)
+    return v
+
+
 @dataclass(frozen=True)
 class RatingCase:
     """What the life is asked for: the duty cycle (cases with loads N, revolution weights and
@@ -518,6 +532,8 @@ class RatingCase:
     reliability_pct: float
     life_hours: float
     source: str
+    #: what set the smallest duty load, as the user wrote it (errors name it)
+    load_field: str = "loading.axial_load_n"
 
     @property
     def max_load_n(self) -> float:
@@ -529,33 +545,50 @@ def rating_case(design: PRSDesign, spectrum: Spectrum | None = None, mean_load_n
                 operating_factor: float | None = None, reliability_pct: float | None = None) -> RatingCase:
     """The :class:`RatingCase` of a design: a spectrum with speeds (cubic mean, mean speed), or
     a mean load and speed (default the design load and ``rating.speed_rpm``); the design's
-    ``[rating]`` gives what is not stated. Errors name the CLI flag."""
+    ``[rating]`` gives what is not stated. Errors name the CLI flag (or the spectrum case).
+
+    Loads and speeds have the ranges of the design's own (1 to 1e10 N,
+    :data:`~prs_geom.model.validation.LOAD_RANGE_N`; 0.01 to 1e5 rpm,
+    :data:`~prs_geom.model.design.SPEED_RANGE_RPM`; a target life of 1 to 1e7 h)."""
     rs = design.rating or RatingSettings()
     fw = rs.operating_factor if operating_factor is None else operating_factor
     R = rs.reliability_pct if reliability_pct is None else reliability_pct
     H = rs.life_hours if life_hours_target is None else life_hours_target
+    (F_lo, F_hi), (n_lo, n_hi), (H_lo, H_hi) = LOAD_RANGE_N, SPEED_RANGE_RPM, LIFE_RANGE_HOURS
     for flag, value, ok, rule in (("--fw", fw, lambda v: 1.0 <= v <= 5.0, "must be from 1 to 5"),
                                   ("--reliability", R, lambda v: 90.0 <= v <= 99.0,
                                    "must be from 90 to 99 % (the a_1 table of ISO 3408-5 / ISO 281:1990)"),
-                                  ("--life-hours", H, lambda v: 0.0 < v <= 1e7, "must be > 0 and at most 1e7 h")):
+                                  ("--life-hours", H, lambda v: H_lo <= v <= H_hi,
+                                   f"must be from {H_lo:g} to {H_hi:g} h")):
         if isinstance(value, bool) or not (isinstance(value, (int, float)) and math.isfinite(value) and ok(value)):
             raise DesignError(flag, value, rule)
     if spectrum is not None:
         if mean_load_n is not None or speed_rpm is not None:
             raise DesignError("--spectrum", "with --mean-load/--speed-rpm",
                               "give either a spectrum or a mean load and speed, not both")
+        for k, c in enumerate(spectrum.cases):
+            if not F_lo <= c.load_n <= F_hi:
+                raise DesignError(f"spectrum case[{k}].load_n", c.load_n, f"must be from {F_lo:g} N to {F_hi:g} N "
+                                                                          f"for the ratings (forces are in N)")
+            if c.speed_rpm is not None and not n_lo <= c.speed_rpm <= n_hi:
+                raise DesignError(f"spectrum case[{k}].speed_rpm", c.speed_rpm,
+                                  f"must be from {n_lo:g} to {n_hi:g} rpm for the ratings")
         Fm, nm = equivalent_load(spectrum)
+        low = int(np.argmin(spectrum.loads_n))
         return RatingCase(spectrum.loads_n, tuple(float(w) for w in spectrum.weights),
                           tuple(float(c.speed_rpm) for c in spectrum.cases), Fm, nm, float(fw), float(R), float(H),
-                          "spectrum")
-    for flag, value in (("--mean-load", mean_load_n), ("--speed-rpm", speed_rpm)):
-        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise DesignError(flag, value, "must be a number > 0")
+                          "spectrum", f"spectrum case[{low}].load_n")
+    for flag, value, lo, hi, unit in (("--mean-load", mean_load_n, F_lo, F_hi, "N"),
+                                      ("--speed-rpm", speed_rpm, n_lo, n_hi, "rpm")):
+        if value is not None and (isinstance(value, bool) or not (isinstance(value, (int, float))
+                                                                  and math.isfinite(value) and lo <= value <= hi)):
+            raise DesignError(flag, value, f"must be a number from {lo:g} to {hi:g} {unit}")
     F = design.loading.axial_load_n if mean_load_n is None else float(mean_load_n)
     n = rs.speed_rpm if speed_rpm is None else float(speed_rpm)
     src = "mean load from " + ("--mean-load" if mean_load_n is not None else "loading.axial_load_n") + \
         ", speed from " + ("--speed-rpm" if speed_rpm is not None else "rating.speed_rpm")
-    return RatingCase((F,), (1.0,), (n,), F, n, float(fw), float(R), float(H), src)
+    return RatingCase((F,), (1.0,), (n,), F, n, float(fw), float(R), float(H), src,
+                      "--mean-load" if mean_load_n is not None else "loading.axial_load_n")
 
 
 @dataclass(frozen=True)
@@ -623,6 +656,13 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     loads_one = np.concatenate([cases, curve])
     per = len(loads_one)
     g_nr, g_rs = zip(*(pitch_gaps(design.thread.pitch_mm, r, nt) for r, nt in (variants[k] for k in names)))
+    # every variant is solved at the duty loads and at the curve loads: each small enough for
+    # the load model (docs: the mean tooth approach and the gaps, analysis.loads.check_load_scale)
+    gap_pairs = list(zip(g_nr, g_rs))
+    low = int(np.argmin(cases))
+    check_load_scale(design, model, float(cases[low]), case.load_field,
+                     float(cases[low]) if case.load_field != "loading.axial_load_n" else F0, gaps=gap_pairs)
+    check_load_scale(design, model, float(curve.min()), gaps=gap_pairs, min_approach=False)
     G_nr = np.repeat(np.stack(g_nr), per, axis=0)
     G_rs = np.repeat(np.stack(g_rs), per, axis=0)
     b = solve_loads_batch(model, np.tile(loads_one, len(names)), G_nr, G_rs)
@@ -651,6 +691,10 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
                    "max_hertz_pressure_mpa": p_max,
                    "static_safety": (rs.static_pressure_limit_mpa / p_max) ** 3,
                    "hertz_pressure_mpa": {"roller_screw": p_rs.tolist(), "nut_roller": p_nr.tolist()}}
+    for k in names:
+        for key in ("l10_revolutions", "l10_hours", "static_safety"):
+            _finite(dist[k][key], case.load_field, float(cases[low]) if case.load_field != "loading.axial_load_n"
+                    else F0, f"gives a {key} of {dist[k][key]!r} ({k} pitch lists) out of floating-point range")
     const_h = dist["constant_pitch"]["l10_hours"]
     for k in names:
         dist[k]["gain_over_constant_pitch_hours"] = dist[k]["l10_hours"] - const_h
@@ -668,6 +712,9 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     Fg_solve = Fg[1:]
     rr, nn = variants[own]
     gn, gr = pitch_gaps(design.thread.pitch_mm, rr, nn)
+    preload_field = "rating.preload_n" if rs.preload_n is not None else "loading.axial_load_n"
+    check_load_scale(design, model, float(Fg_solve[0]), preload_field,
+                     rs.preload_n if rs.preload_n is not None else F0, gaps=[(gn, gr)], min_approach=False)
     bg = solve_loads_batch(model, Fg_solve, np.tile(gn, (len(Fg_solve), 1)), np.tile(gr, (len(Fg_solve), 1)))
     dg = np.concatenate([[0.0], bg.axial_deflection_mm - first[io]])
     ext = np.linspace(0.0, 1.5 * F0, 61)
@@ -680,8 +727,11 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     E_s = design.materials.screw.youngs_modulus_mpa
     d_root = design.screw.minor_diameter_mm
     L_free = sup.unsupported_length_mm if sup.unsupported_length_mm is not None else design.screw.length_mm
-    n_cr = critical_speed(d_root, L_free, sup.critical_speed_ends, E_s)
-    F_buck = buckling_load(d_root, L_free, sup.buckling_ends, E_s)
+    L_field = "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None else "screw.length_mm"
+    n_cr = _finite(lambda: critical_speed(d_root, L_free, sup.critical_speed_ends, E_s), L_field, L_free,
+                   "gives a critical speed out of floating-point range")
+    F_buck = _finite(lambda: buckling_load(d_root, L_free, sup.buckling_ends, E_s), L_field, L_free,
+                     "gives a buckling load out of floating-point range")
     n_dn = rs.dn_limit_mm_rpm / design.screw.pitch_diameter_mm
     n_perm = min(sup.critical_speed_factor * n_cr, n_dn)
     lead = design.screw.starts * design.thread.pitch_mm

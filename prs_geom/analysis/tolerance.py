@@ -50,7 +50,7 @@ from scipy import stats
 
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_solver import LoadModel, RollerLoadResult, solve_loads_rollers
-from prs_geom.analysis.loads import gap_terms_rollers
+from prs_geom.analysis.loads import check_load_scale, gap_terms_rollers
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
 
@@ -300,10 +300,17 @@ def study_problem(design: PRSDesign, model: LoadModel, errors: ErrorModel,
                   load_fractions: Sequence[float], roller: NDArray | None = None,
                   nut: Sequence[float] | None = None) -> StudyProblem:
     """The :class:`StudyProblem` of ``design`` (or of other pitch lists ``roller`` /
-    ``nut``) at ``load_fractions`` of its design load."""
+    ``nut``) at ``load_fractions`` of its design load. The smallest load must suit the load
+    model (:func:`~prs_geom.analysis.loads.check_load_scale`: a
+    :class:`~prs_geom.model.errors.DesignError` on ``tolerances.load_fractions[k]`` if not)."""
     g_nr, g_rs = gap_terms_rollers(design, roller, nut)
     F0 = design.loading.axial_load_n
-    return StudyProblem(model, g_nr, g_rs, tuple(float(f) * F0 for f in load_fractions), errors)
+    loads = tuple(float(f) * F0 for f in load_fractions)
+    if loads:
+        k = int(np.argmin(loads))
+        check_load_scale(design, model, loads[k], f"tolerances.load_fractions[{k}]", load_fractions[k],
+                         gaps=[(g_nr, g_rs)])
+    return StudyProblem(model, g_nr, g_rs, loads, errors)
 
 
 @dataclass(frozen=True)

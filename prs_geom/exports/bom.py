@@ -7,6 +7,10 @@ from its meshes (the rigid body's parts, their overlaps counted once: a roller w
 gears and journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
 and the standard designation where there is one (the DIN 472 retaining ring). Masses are
 in kg, volumes in mm^3; the CSV keeps full float64 precision.
+
+The material names come from the design file as typed: they go through
+:mod:`prs_geom.exports.textsafe` (a CSV field never begins a spreadsheet formula, every text
+cell of the workbook is stored as a string).
 """
 from __future__ import annotations
 
@@ -17,6 +21,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from prs_geom.exports.textsafe import csv_comment, csv_field, xlsx_append
 
 #: Columns: key, title, unit.
 COLUMNS = (("item", "item", ""), ("part", "part", ""), ("quantity", "quantity", ""),
@@ -136,13 +142,17 @@ def parts_list(design: Any, asm: Any) -> list[PartsListRow]:
 
 
 def _cell(v: Any) -> str:
+    """A CSV field: text neutralised (:func:`~prs_geom.exports.textsafe.csv_field`), floats
+    in full precision."""
+    if isinstance(v, str):
+        return csv_field(v)
     return repr(v) if isinstance(v, float) else str(v)
 
 
 def parts_list_csv(rows: list[PartsListRow], design_name: str) -> str:
     """``parts_list.csv``: a ``#`` header line, the column keys, one row per part."""
     buf = io.StringIO()
-    buf.write(f"# parts list of design '{design_name}'; volume of one piece in mm^3 from its mesh, "
+    buf.write(f"# parts list of design '{csv_comment(design_name)}'; volume of one piece in mm^3 from its mesh, "
               f"masses in kg (density x volume)\n")
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([c[0] for c in COLUMNS])
@@ -168,25 +178,25 @@ def write_parts_list_xlsx(rows: list[PartsListRow], path: Path, design_name: str
     wb = Workbook()
     ws = wb.active
     ws.title = "parts list"
-    ws.append([f"Parts list of design '{design_name}'"])
+    xlsx_append(ws, [f"Parts list of design '{design_name}'"])
     ws["A1"].font = Font(bold=True, size=13)
-    ws.append([f"{t} ({u})" if u else t for _, t, u in COLUMNS])
+    xlsx_append(ws, [f"{t} ({u})" if u else t for _, t, u in COLUMNS])
     fill = PatternFill("solid", fgColor="DDE6F0")
     for c in range(1, len(COLUMNS) + 1):
         ws.cell(row=2, column=c).font = Font(bold=True)
         ws.cell(row=2, column=c).fill = fill
-    ws.append([k for k, _, _ in COLUMNS])
+    xlsx_append(ws, [k for k, _, _ in COLUMNS])
     for c in range(1, len(COLUMNS) + 1):
         ws.cell(row=3, column=c).font = Font(italic=True, color="777777", size=8)
     for r in rows:
         row = r.as_dict()
-        ws.append([row[k] for k, _, _ in COLUMNS])
+        xlsx_append(ws, [row[k] for k, _, _ in COLUMNS])     # material names as text, never formulas
         for c, (k, _, _) in enumerate(COLUMNS, start=1):
             if k.endswith("_kg"):
                 ws.cell(row=ws.max_row, column=c).number_format = "0.0000"
             elif k == "volume_mm3":
                 ws.cell(row=ws.max_row, column=c).number_format = "0.0"
-    ws.append(["", "total", sum(r.quantity for r in rows), "", "", "", "", sum(r.total_mass_kg for r in rows)])
+    xlsx_append(ws, ["", "total", sum(r.quantity for r in rows), "", "", "", "", sum(r.total_mass_kg for r in rows)])
     ws.cell(row=ws.max_row, column=8).number_format = "0.0000"
     ws.freeze_panes = "A4"                   # title, column titles and keys stay
     for c, w in zip("ABCDEFGHIJ", (6, 16, 9, 18, 10, 14, 12, 12, 22, 70)):

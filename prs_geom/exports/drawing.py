@@ -39,6 +39,10 @@ deterministic for a given date string (written by :func:`prs_geom.exports.dxf.sa
 except what ezdxf stamps with the clock on saving ($TDUPDATE, $VERSIONGUID and its "written
 by" time, the fields ``tests/golden/fingerprint.py`` drops); $TDCREATE is the date string and
 $FINGERPRINTGUID comes from the design hash. The PDF is the same bytes from run to run.
+Text from the design file (the design name; on the mechanism drawings the material names) is
+escaped for TEXT entities (:func:`prs_geom.exports.textsafe.dxf_text`) so that the drawing and
+the PDF show it as typed; the PDF draws the texts' glyph outlines (ezdxf's font engine), so no
+matplotlib mathtext is parsed.
 """
 from __future__ import annotations
 
@@ -52,6 +56,7 @@ from pathlib import Path
 import numpy as np
 
 from prs_geom._version import __version__
+from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.datum import DatumMark, datum_mark
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
 from prs_geom.geometry.primitives import EllipseArc, Segment
@@ -393,11 +398,11 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     for i, n in enumerate(lines):
         t(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((NOTES[0], NOTES[1] - 5.0 * i))
     mat = getattr(design.materials, part)
-    rows = [("Design", design.name), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
+    rows = [("Design", dxf_text(design.name)), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
             ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{_scale_text(s)} (detail 10:1)"), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{PARTS.index(part) + 1}/{len(PARTS)} A3")]
-    _title_block(psp, rows, f"PRS {part.upper()} - {design.name}")
+    _title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")
     # -- header: model-space extents (after the page setup, which resets them)
     ext = bbox.extents(msp)
     # ezdxf writes the header variables from the layouts on saving

@@ -12,7 +12,8 @@ ARC in the normal section and a true ELLIPSE in the axial section (the normal-se
 stretched axially by 1 / cos(lambda): see :mod:`prs_geom.sections`); no polylines.
 Layers: ``PROFILE``, ``CENTRE`` (axis lines, linetype CENTER), ``PITCH`` (pitch lines,
 linetype DASHED), ``ANNOTATION`` (labels and the title block). Header: $INSUNITS = 4 (mm),
-$MEASUREMENT = 1 (metric).
+$MEASUREMENT = 1 (metric). The design name is written as literal text
+(:func:`prs_geom.exports.textsafe.dxf_text`).
 """
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ import ezdxf
 from ezdxf import units
 
 from prs_geom._version import __version__
+from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.profiles import ThreadProfiles
@@ -105,7 +107,7 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
         y += (body or pr.outer_radius) + 12.0
     # title block
     lines = [
-        f"prs_geom {__version__}  design: {design.name}",
+        f"prs_geom {__version__}  design: {dxf_text(design.name)}",
         f"units mm; pitch p = {p:g}; flank half-angle {design.thread.flank_half_angle_deg:g} deg; "
         f"{design.thread.hand} hand; {design.thread.engaged_teeth} teeth; {design.roller.count} rollers",
         f"pitch dia. screw {design.screw.pitch_diameter_mm:g} ({design.screw.starts} starts), roller "

@@ -17,6 +17,10 @@ a meshing device, :data:`~prs_geom.geometry.mechanism.NUT_END_RELIEF_MM`):
 * **assembly** (axial half-section of every part as its outline, upper half): one balloon
   per parts-list item (item number in a circle, a leader to the part) and the parts list
   table on the sheet.
+
+The design and material names are written as literal text
+(:func:`prs_geom.exports.textsafe.dxf_text`; notes wrap with
+:func:`~prs_geom.exports.textsafe.dxf_wrap`, which never cuts an escape).
 """
 from __future__ import annotations
 
@@ -27,6 +31,7 @@ from typing import Any
 from prs_geom._version import __version__
 from prs_geom.exports.drawing import (FRAME, NOTES, SHEET, TEXT_H, TITLE_H, _dim_override, _hatch,
                                       _new_doc, _scale_text, _stamp, _title_block)
+from prs_geom.exports.textsafe import dxf_text, dxf_wrap
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
 from prs_geom.progress import ProgressFn
@@ -51,8 +56,6 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
            view_centre: tuple[float, float], scale: float, label: str, date: str) -> None:
     """Paper space: frame, the viewport :data:`VIEW` at ``scale`` centred on ``view_centre``
     (model mm), its label, the notes below it, the title block; header extents and stamp."""
-    import textwrap
-
     from ezdxf import bbox
 
     msp = doc.modelspace()
@@ -69,7 +72,7 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
                      dxfattribs={"layer": "VIEWPORTS"})
     psp.add_text(f"{label}  {_scale_text(scale)}", height=TITLE_H,
                  dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
-    lines = [w for n in notes for w in textwrap.wrap(n, NOTES[2], subsequent_indent="  ")]
+    lines = [w for n in notes for w in dxf_wrap(n, NOTES[2], subsequent_indent="  ")]
     for i, n in enumerate(lines):
         psp.add_text(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((25.0, 70.0 - 5.0 * i))
     _title_block(psp, rows, title)
@@ -90,7 +93,7 @@ VIEW = (25.0, 85.0, 405.0, 275.0)
 
 def _rows(design: PRSDesign, part: str, material, scale: float, date: str, version: str,
           sheet: int) -> list[tuple[str, str]]:
-    return [("Design", design.name), ("Part", part), ("Material", material.name),
+    return [("Design", dxf_text(design.name)), ("Part", part), ("Material", dxf_text(material.name)),
             ("Density", f"{material.density_kg_m3:g} kg/m^3"), ("Scale", _scale_text(scale)), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{sheet}/{3 + len(MECHANISM_DRAWINGS)} A3")]
@@ -159,7 +162,7 @@ def carrier_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
              if design.mechanism.carrier_guidance == "clear" else
              f"Guided in the nut bore: fit {lay.carrier_fit.fit}",
              "Parts list item 4 (2 off)"]
-    _sheet(doc, "A3_CARRIER", design, f"PRS CARRIER - {design.name}",
+    _sheet(doc, "A3_CARRIER", design, f"PRS CARRIER - {dxf_text(design.name)}",
            _rows(design, "carrier", design.materials.carrier, s, date, version, 4), notes,
            (0.5 * (-R + x0 + t) + 10 * k, 0.0), s, "FRONT VIEW and SECTION through a journal bore", date)
     return doc
@@ -215,7 +218,7 @@ def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
              f"Ring gear in the first {w:g} mm (root diameter {2 * gear_root:.3f}): see the nut drawing"
              if w > 0 else "No ring gear",
              "The upper end is the mirror image about the nut's mid-plane; parts list item 3"]
-    _sheet(doc, "A3_NUT_END", design, f"PRS NUT END - {design.name}",
+    _sheet(doc, "A3_NUT_END", design, f"PRS NUT END - {dxf_text(design.name)}",
            _rows(design, "nut end", design.materials.nut, s, date, version, 5), notes,
            (0.5 * length + 20 * k, 0.5 * R), s, "SECTION (axial, upper half) of the nut end", date)
     return doc
@@ -290,9 +293,10 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
         msp.add_line((bx + r_b * dx / d, top + r_b * dy / d), (tx, ty), dxfattribs={"layer": "BALLOONS"})
         msp.add_circle((tx, ty), 0.6 * k, dxfattribs={"layer": "BALLOONS"})     # the leader's dot
     notes = ["Parts list (item, part, quantity, material, designation):"] + [
-        f"  {r.item}  {r.part}  x{r.quantity}  {r.material.name}" + (f"  {r.designation}" if r.designation else "")
+        f"  {r.item}  {r.part}  x{r.quantity}  {dxf_text(r.material.name)}"
+        + (f"  {r.designation}" if r.designation else "")
         for r in parts] + ["Outlines: thread envelopes at the crest diameters; roller 0 in the section plane"]
-    _sheet(doc, "A3_ASSEMBLY", design, f"PRS ASSEMBLY - {design.name}",
+    _sheet(doc, "A3_ASSEMBLY", design, f"PRS ASSEMBLY - {dxf_text(design.name)}",
            _rows(design, "assembly", design.materials.nut, s, date, version, 6), notes,
            (0.5 * (min(lo, zs0) + max(hi, zs1)), 0.5 * R + 8 * k), s, "ASSEMBLY (axial half-section)", date)
     return doc

@@ -49,7 +49,7 @@ from types import TracebackType
 from typing import Any, Iterable
 
 from prs_geom.model.errors import OutputRefused
-from prs_geom.model.io import check_output_file, is_office_lock, write_file_atomic
+from prs_geom.model.io import check_output_file, is_office_lock, read_user_file, write_file_atomic
 
 __all__ = ["MANIFEST_NAME", "AtomicOutputDir", "OutputRefused", "check_output_dir", "check_output_file",
            "clean_stale", "file_sha256", "legacy_manifest", "read_manifest", "write_file_atomic"]
@@ -131,6 +131,11 @@ def check_output_dir(target: str | os.PathLike[str], force: bool = False, keep: 
     path and what is in the way.
     """
     given = str(target)
+    # before resolving: resolve() follows a dangling link to its missing target, which
+    # would then be created wherever the link points
+    if Path(target).is_symlink() and not Path(target).exists():
+        raise OutputRefused(f"output path {given!r} is a dangling symbolic link (to "
+                            f"{os.readlink(target)!r}): prs-geom does not follow it; give a folder")
     path = Path(target).resolve()
     cwd = Path.cwd().resolve()
     if path == cwd or path in cwd.parents:
@@ -140,8 +145,6 @@ def check_output_dir(target: str | os.PathLike[str], force: bool = False, keep: 
     if path.parent == path:
         raise OutputRefused(f"output folder {given!r} is a file-system root")
     if not path.exists():
-        if path.is_symlink():
-            raise OutputRefused(f"output path {given!r} is a dangling symbolic link")
         return path
     if not path.is_dir():
         raise OutputRefused(f"output path {given!r} is an existing file, not a folder: prs-geom does "
@@ -244,7 +247,8 @@ class AtomicOutputDir:
         if source is not None:
             src = Path(source).resolve()
             if self.target in src.parents and src.is_file():
-                self.keep[src.relative_to(self.target).as_posix()] = src.read_bytes()
+                # bounded like every read of a user's file (model.io.read_user_file)
+                self.keep[src.relative_to(self.target).as_posix()] = read_user_file(src, "design file")
         self.target = check_output_dir(target, force, self.keep)
         self.extra = dict(manifest_extra or {})
         self.tmp: Path | None = None

@@ -9,6 +9,10 @@ XLSX (openpyxl): a summary sheet with every part's header, then one table per pa
 to about 16 significant digits, the precision of the format; shown to 0.01 um), formatted
 for printing (A4 landscape, fit to one page wide, title rows repeated on every page, units in
 the column titles, page header with design, part, date and version).
+
+Text (the design name and the tolerance source a design file brings) goes through
+:mod:`prs_geom.exports.textsafe`: CSV fields and comment lines never begin a spreadsheet
+formula, every text cell of the workbook is stored as a string.
 """
 from __future__ import annotations
 
@@ -17,6 +21,7 @@ import io
 from pathlib import Path
 
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
+from prs_geom.exports.textsafe import csv_comment, csv_field, xlsx_append, xlsx_header_text, xlsx_text
 
 
 def _cell(v) -> str:
@@ -41,7 +46,8 @@ def _sheet_cell(v) -> str:
 def sheet_csv(sheet: MachiningSheet) -> str:
     buf = io.StringIO()
     for k, v in sheet.header.items():
-        buf.write(f"# {k}: {_sheet_cell(v)}\n")
+        # header text (the design name, the tolerance source) inside a comment line
+        buf.write(f"# {k}: {csv_comment(v) if isinstance(v, str) else _sheet_cell(v)}\n")
     for st in sheet.starts:
         buf.write(f"# start {st['start']}: " + ", ".join(
             f"{k} {_sheet_cell(v) if not isinstance(v, list) else ' '.join(map(str, v))}"
@@ -49,6 +55,7 @@ def sheet_csv(sheet: MachiningSheet) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow([c[0] for c in COLUMNS])
     for row in sheet.rows:
+        # numbers and the sheet's own words (flank, "-" for a flank no contact loads): no design text
         w.writerow([_sheet_cell(row[c[0]]) for c in COLUMNS])
     return buf.getvalue()
 
@@ -94,14 +101,14 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     row_border = Border(bottom=Side(style="hair", color="CCCCCC"))
     parts = list(sheets)
     design = next(iter(sheets.values())).header["design"] if sheets else ""
-    summary.append([f"Pitch-modification machining sheets of design '{design}'"])
+    xlsx_append(summary, [f"Pitch-modification machining sheets of design '{design}'"])
     summary["A1"].font = Font(bold=True, size=13)
-    summary.append(["field"] + parts)
+    xlsx_append(summary, ["field"] + parts)
     for c in range(1, len(parts) + 2):
         summary.cell(row=2, column=c).font = bold
     keys = list(dict.fromkeys(k for sh in sheets.values() for k in sh.header))
     for k in keys:
-        summary.append([k] + [sheets[p].header.get(k) for p in parts])
+        xlsx_append(summary, [k] + [sheets[p].header.get(k) for p in parts])
         fmt = "0.00000" if k.endswith("_mm") else "0.00" if k.endswith("_um") or "_um_" in k else \
             "0.000" if k.endswith(("_deg", "_degC")) else "0.0000"
         for c in range(2, len(parts) + 2):
@@ -120,7 +127,12 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
             r0 += 1
             for c, k in enumerate(skeys, start=1):
                 v = p_ if k == "part" else st[k]
-                cell = summary.cell(row=r0, column=c, value=" ".join(map(str, v)) if isinstance(v, list) else v)
+                v = " ".join(map(str, v)) if isinstance(v, list) else v
+                cell = summary.cell(row=r0, column=c)
+                if isinstance(v, str):
+                    xlsx_text(cell, v)
+                else:
+                    cell.value = v
                 if k.endswith("_mm"):
                     cell.number_format = "0.00000"
     summary.column_dimensions["A"].width = max(len(k) for k in keys) + 2 if keys else 20
@@ -132,8 +144,8 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
     _print_setup(summary, design, "summary", version, date)
     for part, sheet in sheets.items():
         ws = wb.create_sheet(part)
-        ws.append([f"Machining sheet: {part} of design '{sheet.header['design']}' "
-                   f"(datum, process and tolerances on the summary sheet)"])
+        xlsx_append(ws, [f"Machining sheet: {part} of design '{sheet.header['design']}' "
+                         f"(datum, process and tolerances on the summary sheet)"])
         ws["A1"].font = Font(bold=True, size=12)
         title_row, key_row = 2, 3
         for c, (key, title, unit) in enumerate(COLUMNS, start=1):
@@ -146,8 +158,12 @@ def write_xlsx(sheets: dict[str, MachiningSheet], path: Path, version: str = "",
         for i, row in enumerate(sheet.rows):
             for c, (key, _, unit) in enumerate(COLUMNS, start=1):
                 v = row[key]
-                cell = ws.cell(row=key_row + 1 + i, column=c,
-                               value=("yes" if v else "no") if isinstance(v, bool) else v)
+                v = ("yes" if v else "no") if isinstance(v, bool) else v
+                cell = ws.cell(row=key_row + 1 + i, column=c)
+                if isinstance(v, str):
+                    xlsx_text(cell, v)
+                else:
+                    cell.value = v
                 if unit == "mm":
                     cell.number_format = "0.00000"
                 elif unit == "um":
@@ -169,7 +185,7 @@ def _print_setup(ws, design: str, part: str, version: str, date: str) -> None:
     ws.page_setup.fitToWidth = 1
     ws.page_setup.fitToHeight = 0
     ws.sheet_properties.pageSetUpPr.fitToPage = True
-    ws.oddHeader.left.text = f"{design} - {part}"
+    ws.oddHeader.left.text = xlsx_header_text(f"{design} - {part}")
     ws.oddHeader.right.text = " ".join(x for x in (date, f"prs_geom {version}" if version else "") if x)
     ws.oddFooter.center.text = "page &P of &N"
 
@@ -202,5 +218,5 @@ def inspection_csv(reports: dict[str, dict]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(keys)
     for r in rows:
-        w.writerow([_cell(r.get(k)) for k in keys])
+        w.writerow([csv_field(v) if isinstance(v, str) else _cell(v) for v in (r.get(k) for k in keys)])
     return buf.getvalue()

@@ -27,6 +27,12 @@ Modelled sizes of fitted features are the middle of their ISO 286 zone, so that 
 meshes sit at the mean clearance; the fit's range itself is checked analytically at both
 limits (:class:`FitCheck`). Volumes are closed forms of the true (circular) shapes; the
 mesh volumes are compared with them in the tests.
+
+Every size that leaves a standard table (a journal, carrier or stack-up length beyond the
+500 mm of ISO 286, a carrier too large for the 200 mm of DIN 472) is a
+:class:`~prs_geom.model.errors.DesignError` naming the design field that drives it, the
+table, its range and the value. :func:`check_layout` runs all of this (and the gear sizing)
+without meshing: ``prs-geom validate`` and ``build`` call it before any work.
 """
 from __future__ import annotations
 
@@ -35,7 +41,8 @@ from dataclasses import dataclass
 
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
-from prs_geom.model.standards import Fit, FitLimits, RetainingRing, din472_ring, din472_sizes, tolerance_zone
+from prs_geom.model.standards import (SIZE_RANGE_UPPER_MM, Fit, FitLimits, RetainingRing, StandardTableError,
+                                      din472_ring, din472_sizes, tolerance_zone)
 
 #: Opening of the modelled retaining ring (rad): DIN 472 rings are open C shapes; the lugs
 #: and their holes are not modelled (their volume is a few per cent of the ring's).
@@ -250,6 +257,37 @@ def _zone_mm(nominal: float, symbol: str) -> tuple[float, float]:
     return z.lower_mm, z.upper_mm
 
 
+#: The end of the ISO 286 tables (mm): no tolerance grade or deviation above this size.
+ISO286_END_MM = float(SIZE_RANGE_UPPER_MM[-1])
+_ISO286_RANGE = (f"ISO 286 tolerance grades are tabulated over 0 up to and including {ISO286_END_MM:g} mm "
+                 f"(the table ends there)")
+
+
+def _stack_dimension(design: PRSDesign, name: str, what: str, nominal: float, symbol: str, sense: int,
+                     count: int, terms: list[tuple[str, object, float, str]], note: str = "") -> Dimension:
+    """A :class:`Dimension` of the stack-up with its ISO 286 zone; a length beyond the table
+    is a :class:`DesignError` on the field of ``terms`` (field, value, mm it adds, words) that
+    adds the most, with the table's range and what to change."""
+    try:
+        lo, hi = _zone_mm(nominal, symbol)
+    except StandardTableError:
+        fld, value, _, _ = max(terms, key=lambda t: t[2])
+        parts = " + ".join(words for *_, words in terms)
+        p, n = design.thread.pitch_mm, design.thread.engaged_teeth
+        L = n * p
+        rest = nominal - L if any(t[0] == "thread.engaged_teeth" for t in terms) else None
+        if fld == "thread.engaged_teeth" and rest is not None:
+            n_max = math.floor((ISO286_END_MM - rest) / p + 1e-9)
+            fix = (f"reduce thread.engaged_teeth to at most {n_max} (or thread.pitch_mm)" if n_max >= 2 else
+                   "shorten the parts outside the threads")
+        else:
+            fix = f"reduce {fld}"
+        raise DesignError(fld, value, f"{what} {nominal:.6g} mm ({parts}): {_ISO286_RANGE}, so the stack-up "
+                                      f"zone mechanism.length_tolerance = \"{symbol}\" has no value for it; {fix}, "
+                                      f"or leave the mechanism out (mechanism.enabled = false)", note) from None
+    return Dimension(name, nominal, lo, hi, sense, count)
+
+
 def layout(design: PRSDesign) -> MechanismLayout | None:
     """The mechanism parts of ``design`` (None when ``mechanism.enabled`` is false).
 
@@ -278,7 +316,15 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         raise DesignError("mechanism.journal_diameter_mm", d_j,
                           f"must be positive and below the roller's root diameter {roller_root:.4g} mm "
                           f"(the journal steps down from the gear)")
-    journal = _fit_check("roller journal in carrier bore", m.journal_fit, d_j)
+    j_note = "" if m.journal_diameter_mm else ("not in the design file: the default 0.6 x the roller root "
+                                               "diameter, rounded down to 0.5 mm")
+    try:
+        journal = _fit_check("roller journal in carrier bore", m.journal_fit, d_j)
+    except StandardTableError as exc:
+        raise DesignError("mechanism.journal_diameter_mm", d_j,
+                          f"the journal fit mechanism.journal_fit = \"{m.journal_fit}\" has no value at this "
+                          f"diameter ({exc}; {_ISO286_RANGE}): give a smaller mechanism.journal_diameter_mm",
+                          j_note) from None
     t_c = m.carrier_thickness_mm or _ceil_to(1.5 * d_j, 0.5)
     c_r = m.carrier_radial_clearance_mm
     r_in = 0.5 * design.screw.major_diameter_mm + c_r
@@ -304,8 +350,11 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         sizes = [s for s in din472_sizes() if s >= need]
         if not sizes:
             raise DesignError("mechanism.ring_bore_mm", None,
-                              f"no DIN 472 ring takes a carrier of {2 * r_out_min:.4g} mm outside diameter "
-                              f"(largest bore {max(din472_sizes()):g} mm)")
+                              f"no DIN 472 ring takes a carrier of {2 * r_out_min:.4g} mm outside diameter: the "
+                              f"nut end bore would be {need:.4g} mm, and DIN 472 retaining rings are tabulated for "
+                              f"bores of {min(din472_sizes()):g} to {max(din472_sizes()):g} mm (largest bore "
+                              f"{max(din472_sizes()):g} mm; the table ends there): reduce screw.pitch_diameter_mm "
+                              f"and roller.pitch_diameter_mm, or leave the mechanism out (mechanism.enabled = false)")
         ring = din472_ring(sizes[0])
     d1 = ring.bore_mm
     carrier_fit = _fit_check("carrier in nut bore", m.carrier_fit, d1) if guided else None
@@ -347,12 +396,23 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
     groove_span = hi.groove[1] - lo.groove[0]
     roller_len = L + 2.0 * w
     tol = m.length_tolerance
+    n_teeth, p = design.thread.engaged_teeth, design.thread.pitch_mm
+    thread = ("thread.engaged_teeth", n_teeth, L, f"engaged length n p = {n_teeth} x {p!r} = {L:.6g} mm")
+    gears_w = ("gears.face_width_mm", design.gears.face_width_mm if design.gears.face_width_mm is not None else w,
+               2.0 * w, f"2 gear faces of {w:.6g} mm")
+    carriers = ("mechanism.carrier_thickness_mm", t_c, 2.0 * t_c, f"2 carriers of {t_c:.6g} mm")
+    plays = ("mechanism.ring_play_mm", c, 2.0 * (g + c + s),
+             f"2 x (end play {g:g} + ring play {c:g} + ring {s:g}) mm")
     stack = StackUp((
-        Dimension("nut: span between the groove outer flanks", groove_span, *_zone_mm(groove_span, tol), +1),
+        _stack_dimension(design, "nut: span between the groove outer flanks", "the nut length between the "
+                         "outer flanks of its ring grooves is", groove_span, tol, +1, 1,
+                         [thread, gears_w, carriers, plays]),
         # the DIN 472 thickness tolerance is not in the ring table here: taken as h11
         Dimension("retaining ring thickness s (DIN 472, h11)", s, *_zone_mm(s, "h11"), -1, 2),
-        Dimension("carrier thickness", t_c, *_zone_mm(t_c, tol), -1, 2),
-        Dimension("roller length between gear faces", roller_len, *_zone_mm(roller_len, tol), -1),
+        _stack_dimension(design, "carrier thickness", "the carrier thickness is", t_c, tol, -1, 2,
+                         [carriers]),
+        _stack_dimension(design, "roller length between gear faces", "the roller length between its gear faces is",
+                         roller_len, tol, -1, 1, [thread, gears_w]),
     ))
     return MechanismLayout(
         gear_face_width_mm=w, ring_gear_outer_radius_mm=ring_gear_outer, journal_diameter_mm=d_j,
@@ -360,3 +420,41 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         carrier_thickness_mm=t_c, carrier_fit=carrier_fit, centre_distance_mm=a, roller_count=z,
         ring=ring, ring_inner_radius_mm=ring_inner, nut_bore_radius_mm=bore_radius,
         nut_outer_radius_mm=R_o, ends=ends, stack=stack)
+
+
+def check_layout(design: PRSDesign) -> MechanismLayout | None:
+    """Every rule of a build that needs no meshing, for the parts beyond the threads: the end
+    gears' sizing (:func:`~prs_geom.geometry.gears.design_gear_pair`) and, when the design has
+    a mechanism, its :func:`layout` with every standard-table look-up (ISO 286 fits and the
+    stack-up zones, the DIN 472 ring). ``prs-geom validate`` and ``build`` run it before any
+    work, so that a design they accept does not fail later for a rule it could have checked.
+
+    Returns the layout (None without a mechanism). Raises
+    :class:`~prs_geom.model.errors.DesignError` naming the field; the checks whose failure a
+    build reports as a warning (a fit without running clearance, a stack-up without play)
+    are in :func:`layout_warnings`.
+    """
+    if design.mechanism.enabled:
+        return layout(design)
+    from prs_geom.geometry.gears import design_gear_pair
+
+    design_gear_pair(design)
+    return None
+
+
+def layout_warnings(lay: MechanismLayout | None) -> list[str]:
+    """The analytic mechanism checks that fail (a build reports them as warnings): fits
+    without clearance at the limits of their zones, an axial stack-up without play at worst
+    case. One line each, naming the field to change."""
+    if lay is None:
+        return []
+    out = []
+    for fit, fld in ((lay.journal_fit, "mechanism.journal_fit"), (lay.carrier_fit, "mechanism.carrier_fit")):
+        if fit is not None and not fit.passed:
+            out.append(f"mechanism: the {fit.feature} fit {fit.fit} at {fit.nominal_diameter_mm:g} mm has a minimum "
+                       f"clearance of {fit.min_clearance_mm * 1e3:.4g} um (a running fit needs it > 0): change {fld}")
+    if not lay.stack.passed:
+        out.append(f"mechanism: the axial stack-up has {lay.stack.min_mm:.4g} mm of play at worst case (it must "
+                   f"stay positive): increase mechanism.ring_play_mm or mechanism.roller_end_play_mm, or choose a "
+                   f"finer mechanism.length_tolerance")
+    return out

@@ -18,6 +18,9 @@ frame; ``wave_generator.stl``: its own frame), ``assembly.glb`` (glTF 2.0, metre
 named node per part) and ``assembly.3mf`` (millimetres, one object and build item per part),
 both through :mod:`prs_geom.exports.scene`, and ``report.html``
 (:mod:`prs_geom.harmonic.report`).
+
+Text goes through :mod:`prs_geom.exports.textsafe`: CSV text fields never begin a spreadsheet
+formula, the design name is literal text in the DXF and in the plot title.
 """
 from __future__ import annotations
 
@@ -34,6 +37,7 @@ from ezdxf import units
 
 from prs_geom.exports.dxf import save_dxf
 from prs_geom.exports.scene import Material, Scene, SceneMesh, SceneNode
+from prs_geom.exports.textsafe import csv_field, dxf_text, mpl_text
 # the parts' undeformed geometry lives with the assembly; these names stay importable from here
 from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
                                         flexspline_mesh, flexspline_profile, revolution_sections)
@@ -59,7 +63,7 @@ def ratio_table_csv(table: list[dict[str, Any]]) -> str:
     w = csv.DictWriter(buf, fieldnames=list(table[0]), lineterminator="\n")
     w.writeheader()
     for row in table:
-        w.writerow({k: repr(v) if isinstance(v, float) else v for k, v in row.items()})
+        w.writerow({k: repr(v) if isinstance(v, float) else csv_field(v) for k, v in row.items()})
     return buf.getvalue()
 
 
@@ -77,7 +81,7 @@ def plot_ratio(d: HarmonicDesign, out: Path) -> list[str]:
     ax[1].set_xlabel("position a (mm)")
     ax[1].set_ylabel("radius difference Delta (um)")
     ax[1].grid(alpha=0.3)
-    fig.suptitle(f"{d.name}: stepless harmonic friction drive")
+    fig.suptitle(f"{mpl_text(d.name)}: stepless harmonic friction drive")
     return save_figure(fig, out, "ratio")
 
 
@@ -114,7 +118,8 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
                      height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, c.outer_radius_mm + 2.0))
         blk.add_point((px, pr), dxfattribs={"layer": "ANNOTATION"})
         msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
-    msp.add_text(f"{d.name}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; units mm",
+    msp.add_text(f"{dxf_text(d.name)}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; "
+                 "units mm",
                  height=2.0, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, -10.0))
     save_dxf(doc, path)
 

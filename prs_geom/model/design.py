@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from prs_geom.model.errors import DesignError, DesignWarning
-from prs_geom.model.validation import (bounded, check_name, choice, integer, optional_positive,
+from prs_geom.model.validation import (bounded, check_name, choice, force, integer, optional_force, optional_length,
                                        optional_size, pitch_list, positive, real, size)
 
 #: Installation types of docs/theory/loads.md.
@@ -66,14 +66,17 @@ class Thread:
     Parameters
     ----------
     pitch_mm : float
-        Axial pitch p (mm), the same for all three threads; lead L_i = n_i p.
+        Axial pitch p (mm), the same for all three threads; lead L_i = n_i p; a size
+        (0.01 to 10000 mm, :func:`~prs_geom.model.validation.size`).
     flank_half_angle_deg : float
         Flank half-angle beta (deg) in the normal section, measured from the radial line.
     hand : {"right", "left"}
         Hand of all three threads (they share it, docs/theory/geometry.md).
     engaged_teeth : int
-        Number n of roller teeth engaged with screw and nut; roller and nut thread lengths
-        are n p.
+        Number n of roller teeth engaged with screw and nut (2 to 500); roller and nut thread
+        lengths are n p. The mechanism's axial stack-up (n p plus gears, carriers and rings)
+        must also stay within the ISO 286 tables (up to 500 mm): ``prs-geom validate`` and
+        ``build`` check it with the layout (:func:`prs_geom.geometry.mechanism.check_layout`).
     """
 
     pitch_mm: float = 2.0
@@ -105,7 +108,8 @@ class Screw:
 
     ``major_diameter_mm``/``minor_diameter_mm`` default to a truncation of
     0.6/0.8 of the sharp-V half depth p/(4 tan beta); ``length_mm`` defaults to the
-    engaged length n p plus four pitches.
+    engaged length n p plus four pitches. Diameters are sizes (0.01 to 10000 mm), the
+    length an axial length (0.01 to 1e7 mm, at least n p).
     """
 
     pitch_diameter_mm: float = 24.0
@@ -119,7 +123,7 @@ class Screw:
         integer("starts", self.starts, 1, 20)
         for name in ("major_diameter_mm", "minor_diameter_mm"):
             _set(self, name, optional_size(name, getattr(self, name)))
-        _set(self, "length_mm", optional_positive("length_mm", self.length_mm))
+        _set(self, "length_mm", optional_length("length_mm", self.length_mm))
 
 
 @dataclass(frozen=True)
@@ -217,7 +221,12 @@ class Materials:
 class Loading:
     """Design load and installation (docs/theory/loads.md).
 
-    ``axial_load_n`` is the external axial load F0 (N) carried by all rollers together.
+    ``axial_load_n`` is the external axial load F0 (N) carried by all rollers together, from
+    1 N to 1e10 N (:data:`~prs_geom.model.validation.LOAD_RANGE_N`: below 1 N the teeth
+    deflect by nanometres and the load model loses its conditioning; up to 1e10 N the numbers
+    stay finite and an absurd load gets failed verdicts; the plausibility warnings start at
+    1e7 N). The load must also suit the load model of the design
+    (:func:`prs_geom.analysis.loads.check_load_scale`).
     ``installation``: "tension-compression" (screw pulled, nut pushed, loads enter from the
     same end) or "compression-compression".
     """
@@ -226,7 +235,7 @@ class Loading:
     installation: str = "tension-compression"
 
     def __post_init__(self) -> None:
-        _set(self, "axial_load_n", positive("axial_load_n", self.axial_load_n))
+        _set(self, "axial_load_n", force("axial_load_n", self.axial_load_n))
         choice("installation", self.installation, INSTALLATIONS)
 
 
@@ -273,6 +282,10 @@ DISTRIBUTIONS = ("uniform", "normal")
 #: Largest tolerance accepted (um): beyond this the errors are not tolerances but a
 #: different design, and the linearisations of the error model no longer hold.
 MAX_TOLERANCE_UM = 100.0
+#: Accepted range of ``tolerances.load_fractions`` (fractions of the design load): below 1 %
+#: the tooth approach is a few nanometres against tolerances of micrometres (the study would
+#: only count which tooth touches first); above 10 times it is another design load.
+LOAD_FRACTION_RANGE = (0.01, 10.0)
 #: Per-tooth flank tolerance lists of :class:`Tolerances`: (field, part, mating contact).
 FLANK_FIELDS = ("screw_flank_um", "roller_screw_flank_um", "roller_nut_flank_um", "nut_flank_um")
 
@@ -302,7 +315,8 @@ class Tolerances:
     * ``temperature_k``: temperature of each part (screw, rollers together, nut) against
       the others; each part's pitch grows by its ``materials.*.thermal_expansion_per_k``.
     * ``samples``, ``seed``, ``load_fractions``: the Monte Carlo study ``prs-geom build``
-      runs when the design has this section (load fractions of ``loading.axial_load_n``).
+      runs when the design has this section (load fractions of ``loading.axial_load_n``,
+      each from 0.01 to 10, :data:`LOAD_FRACTION_RANGE`).
     * ``source``: where the numbers come from; ``target_ldc`` and ``confidence``: the target
       of a tolerance synthesis that wrote them (``prs-geom tolerance --target-ldc``).
     """
@@ -344,10 +358,15 @@ class Tolerances:
         if isinstance(fr, (str, bytes, dict)) or not hasattr(fr, "__iter__") or len(fr) == 0:
             raise DesignError("load_fractions", fr, "must be a non-empty list of load fractions")
         out = []
+        lo, hi = LOAD_FRACTION_RANGE
         for k, x in enumerate(fr):
             v = positive(f"load_fractions[{k}]", x)
-            if v > 10.0:
-                raise DesignError(f"load_fractions[{k}]", x, "must be at most 10 (fractions of the design load)")
+            if v > hi:
+                raise DesignError(f"load_fractions[{k}]", x, f"must be at most {hi:g} (fractions of the design load)")
+            if v < lo:
+                raise DesignError(f"load_fractions[{k}]", x,
+                                  f"must be at least {lo:g} (1 % of the design load; below it the teeth deflect by "
+                                  f"nanometres against tolerances of micrometres)")
             out.append(v)
         _set(self, "load_fractions", tuple(out))
         if not isinstance(self.source, str):
@@ -459,6 +478,14 @@ class MechanismSettings:
     DIN 472 bore that takes the carrier with its radial clearance. Fits are ISO 286 symbols
     (hole/shaft, e.g. "H7/g6"); ``length_tolerance`` is the ISO 286 zone of every axial
     length of the stack-up. ``enabled = false`` leaves them out (three threads and gears).
+
+    The standard tables are read here for what this section states alone: a given
+    ``ring_bore_mm`` must be a DIN 472 bore (8 to 200 mm, table sizes only), a given
+    ``journal_diameter_mm`` a size the ISO 286 tables hold for ``journal_fit`` and a given
+    ``carrier_thickness_mm`` one they hold for ``length_tolerance`` (up to 500 mm). What needs
+    the whole design (the stack-up, the ring a carrier needs) is checked by
+    :func:`prs_geom.geometry.mechanism.check_layout`, which ``prs-geom validate`` and ``build``
+    run before any meshing.
     """
 
     enabled: bool = True
@@ -494,6 +521,30 @@ class MechanismSettings:
         except (ValueError, TypeError) as exc:
             raise DesignError("length_tolerance", self.length_tolerance,
                               f"must be an ISO 286 tolerance zone such as \"js11\": {exc}")
+        self._table_lookups()
+
+    def _table_lookups(self) -> None:
+        """The standard-table look-ups of the values given here (class docstring)."""
+        from prs_geom.model.standards import Fit, StandardTableError, din472_ring, tolerance_zone
+
+        if self.ring_bore_mm is not None:
+            try:
+                din472_ring(self.ring_bore_mm)
+            except StandardTableError as exc:
+                raise DesignError("ring_bore_mm", self.ring_bore_mm, f"must be a DIN 472 bore size: {exc}") from None
+        if self.journal_diameter_mm is not None:
+            try:
+                Fit.parse(self.journal_fit).limits(self.journal_diameter_mm)
+            except StandardTableError as exc:
+                raise DesignError("journal_diameter_mm", self.journal_diameter_mm,
+                                  f"the journal fit {self.journal_fit} cannot be looked up there: {exc}") from None
+        if self.carrier_thickness_mm is not None:
+            try:
+                tolerance_zone(self.carrier_thickness_mm, self.length_tolerance)
+            except StandardTableError as exc:
+                raise DesignError("carrier_thickness_mm", self.carrier_thickness_mm,
+                                  f"the stack-up zone {self.length_tolerance} cannot be looked up there: "
+                                  f"{exc}") from None
 
 
 #: End-support cases of the screw for critical speed and buckling (docs/theory/ratings.md):
@@ -506,12 +557,14 @@ class Supports:
     """How the screw is held, for its critical speed and buckling load (docs/theory/ratings.md).
 
     ``unsupported_length_mm``: free length between the bearings (or bearing and nut) that
-    bends and buckles (mm); absent = ``screw.length_mm``. ``critical_speed_ends`` and
+    bends and buckles (mm, 0.01 to 1e7: an axial length, the ratings go as 1/L^2);
+    absent = ``screw.length_mm``. ``critical_speed_ends`` and
     ``buckling_ends``: the end fixity of each case, one of :data:`END_SUPPORTS` (a shaft
     may be mounted differently for whirl, where the nut does not hold it, than for
     buckling). ``buckling_safety``: the permissible buckling load is the Euler load divided
     by this (>= 1). ``critical_speed_factor``: the permissible speed is this fraction of the
-    first whirling speed (0 < f <= 1; catalogues use 0.5 to 0.8).
+    first whirling speed (0.1 to 1; catalogues use 0.5 to 0.8, and a permissible speed of a
+    few per cent of the whirling speed no longer says anything about it).
     """
 
     unsupported_length_mm: float | None = None
@@ -521,15 +574,14 @@ class Supports:
     critical_speed_factor: float = 0.8
 
     def __post_init__(self) -> None:
-        _set(self, "unsupported_length_mm", optional_size("unsupported_length_mm", self.unsupported_length_mm))
+        _set(self, "unsupported_length_mm", optional_length("unsupported_length_mm", self.unsupported_length_mm))
         choice("critical_speed_ends", self.critical_speed_ends, END_SUPPORTS)
         choice("buckling_ends", self.buckling_ends, END_SUPPORTS)
         _set(self, "buckling_safety", bounded("buckling_safety", self.buckling_safety, 1.0, 20.0,
                                               "must be from 1 to 20"))
-        f = real("critical_speed_factor", self.critical_speed_factor)
-        if not 0.0 < f <= 1.0:
-            raise DesignError("critical_speed_factor", self.critical_speed_factor, "must be in (0, 1]")
-        _set(self, "critical_speed_factor", f)
+        _set(self, "critical_speed_factor", bounded(
+            "critical_speed_factor", self.critical_speed_factor, 0.1, 1.0,
+            "must be from 0.1 to 1 (catalogues use 0.5 to 0.8)"))
 
 
 #: Reliabilities (%) the life can be stated for: ISO 3408-5 and ISO 281:1990 tabulate a_1
@@ -543,6 +595,15 @@ DEFAULT_REQUIRED_STATIC_SAFETY = 2.0
 #: Accepted range of ``rating.required_static_safety``: below 1 the load would exceed the
 #: static rating; above 20 the check no longer says anything about the contacts.
 REQUIRED_STATIC_SAFETY_RANGE = (1.0, 20.0)
+#: Accepted range of ``rating.speed_rpm`` (rpm): from one turn in 100 minutes (the life in
+#: hours, L / (60 n), stays finite; 5e-324 rpm overflowed it) to 100 000 rpm.
+SPEED_RANGE_RPM = (0.01, 1e5)
+#: Accepted range of ``rating.life_hours`` (h): a target life of less than an hour is no
+#: rating question; 1e7 h is more than a thousand years.
+LIFE_RANGE_HOURS = (1.0, 1e7)
+#: Accepted range of ``rating.dn_limit_mm_rpm`` (mm/min): makers state 50 000 to 300 000 for
+#: ball and roller screws; below 1000 the permissible speed of any size is under 1 rpm.
+DN_LIMIT_RANGE_MM_RPM = (1e3, 1e7)
 
 
 @dataclass(frozen=True)
@@ -552,13 +613,17 @@ class RatingSettings:
     ``friction_coefficient``: Coulomb friction mu on the thread flanks; the friction angle
     is rho' = atan(mu / cos(beta)). ``speed_rpm``: mean screw speed for the life in hours
     when no spectrum gives one. ``life_hours``: target life for the required dynamic load
-    rating. ``reliability_pct``: reliability of the stated life (90 to 99 %, factor a_1).
+    rating. ``speed_rpm`` from 0.01 to 1e5 rpm, ``life_hours`` from 1 to 1e7 h
+    (:data:`SPEED_RANGE_RPM`, :data:`LIFE_RANGE_HOURS`). ``reliability_pct``: reliability of
+    the stated life (90 to 99 %, factor a_1).
     ``operating_factor``: f_w >= 1 on the load (shocks, vibration). ``static_pressure_limit_mpa``:
     the Hertz pressure of the static load rating (4200 MPa for hardened bearing steel in
-    point contact, ISO 76). ``preload_n``: preload of the double-nut option; absent =
-    design load / 2^(3/2), the preload a Hertzian double nut loses exactly at the design
-    load. ``dn_limit_mm_rpm``: the nut speed limit as nominal diameter x speed (mm/min),
-    the maker's figure for the roller screw. ``required_static_safety``: the smallest static
+    point contact, ISO 76). ``preload_n``: preload of the double-nut option, 1 to 1e10 N like
+    every force (:data:`~prs_geom.model.validation.LOAD_RANGE_N`); absent = design load /
+    2^(3/2), the preload a Hertzian double nut loses exactly at the design load.
+    ``dn_limit_mm_rpm``: the nut speed limit as nominal diameter x speed (mm/min), the maker's
+    figure for the roller screw (1e3 to 1e7, :data:`DN_LIMIT_RANGE_MM_RPM`).
+    ``required_static_safety``: the smallest static
     safety s_0 = C_0a / F_max the limit checks accept (1 to 20); default 2, the lower limit
     a rolling-screw maker's catalogue gives for loads without vibration or impact (THK ball
     screw selection, "static safety factor": f_s >= 2 without, >= 5 with vibration or
@@ -578,9 +643,10 @@ class RatingSettings:
     def __post_init__(self) -> None:
         _set(self, "friction_coefficient", bounded("friction_coefficient", self.friction_coefficient, 0.0, 0.5,
                                                    "must be in [0, 0.5]"))
-        _set(self, "speed_rpm", bounded("speed_rpm", self.speed_rpm, 0.0, 1e5, "must be at most 100000 rpm", positive))
-        _set(self, "life_hours", bounded("life_hours", self.life_hours, 0.0, 1e7, "must be at most 1e7 hours",
-                                         positive))
+        _set(self, "speed_rpm", bounded("speed_rpm", self.speed_rpm, *SPEED_RANGE_RPM,
+                                        "must be from 0.01 to 100000 rpm", positive))
+        _set(self, "life_hours", bounded("life_hours", self.life_hours, *LIFE_RANGE_HOURS,
+                                         "must be from 1 to 1e7 hours", positive))
         _set(self, "reliability_pct", bounded(
             "reliability_pct", self.reliability_pct, *RELIABILITY_RANGE,
             "must be from 90 to 99 % (the range of the a_1 table of ISO 3408-5 / ISO 281:1990)"))
@@ -589,9 +655,10 @@ class RatingSettings:
         _set(self, "static_pressure_limit_mpa", bounded(
             "static_pressure_limit_mpa", self.static_pressure_limit_mpa, 1000.0, 6000.0,
             "must be from 1000 to 6000 MPa (hardened steel: 4000 to 4200)"))
-        _set(self, "preload_n", optional_positive("preload_n", self.preload_n))
-        _set(self, "dn_limit_mm_rpm", bounded("dn_limit_mm_rpm", self.dn_limit_mm_rpm, 0.0, 1e7,
-                                              "must be at most 1e7 mm/min", positive))
+        _set(self, "preload_n", optional_force("preload_n", self.preload_n))
+        _set(self, "dn_limit_mm_rpm", bounded("dn_limit_mm_rpm", self.dn_limit_mm_rpm, *DN_LIMIT_RANGE_MM_RPM,
+                                              "must be from 1000 to 1e7 mm/min (makers state 50000 to 300000)",
+                                              positive))
         _set(self, "required_static_safety", bounded(
             "required_static_safety", self.required_static_safety, *REQUIRED_STATIC_SAFETY_RANGE,
             "must be from 1 to 20 (s_0 = C_0a / F_max; catalogues ask 2 without and 5 with vibration or impact)"))
@@ -835,6 +902,10 @@ class PRSDesign:
                               f"must be at least the engaged length n p = {n * p} mm (thread.engaged_teeth "
                               f"x thread.pitch_mm = {n} x {p!r})")
         tol = self.tolerances
+        if tol is not None and tol.target_ldc is not None and tol.target_ldc > n:
+            raise self._error("tolerances.target_ldc", tol.target_ldc,
+                              f"must be at most engaged_teeth = {n} (the worst coefficient of a tooth that carries "
+                              f"the whole load of its roller)")
         if tol is not None:
             for name in FLANK_FIELDS:
                 v = getattr(tol, name)

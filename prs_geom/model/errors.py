@@ -34,20 +34,72 @@ def quote(text: str) -> str:
 _BARE_KEY = __import__("re").compile(r"^[A-Za-z0-9_-]+$")
 
 
+#: A text value (or key) longer than this, in characters as quoted, is shown in messages by
+#: its first :data:`SHOWN_PREFIX_CHARS` characters and its length, so that an error about a
+#: 200 MB name stays one short line.
+SHOWN_TEXT_CHARS = 80
+SHOWN_PREFIX_CHARS = 40
+#: A formatted value longer than this is cut (lists and tables show 8 entries, 2 levels deep).
+SHOWN_VALUE_CHARS = 200
+#: A field path longer than this is shown with its middle left out.
+SHOWN_FIELD_CHARS = 160
+
+
+def _quote_short(text: str, limit: int = SHOWN_TEXT_CHARS) -> str:
+    """:func:`quote` of ``text``, or of its first :data:`SHOWN_PREFIX_CHARS` characters (fewer
+    when they need escapes) followed by ``... (N characters)`` when the quoted text would be
+    longer than ``limit``. Only the shown part of a long text is looked at."""
+    head = quote(text[:limit + 1])
+    if len(text) <= limit and len(head) <= limit + 2:
+        return head
+    shown = []
+    used = 0
+    for ch in text[:SHOWN_PREFIX_CHARS]:
+        q = quote(ch)[1:-1]
+        if used + len(q) > SHOWN_PREFIX_CHARS:
+            break
+        shown.append(q)
+        used += len(q)
+    return '"' + "".join(shown) + f'"... ({len(text)} characters)'
+
+
 def key_name(key: Any) -> str:
-    """A design-file key as TOML spells it: bare when it can be, else quoted."""
+    """A design-file key as TOML spells it: bare when it can be, else quoted (a long key by
+    its first characters and its length)."""
     key = str(key)
-    return key if _BARE_KEY.match(key) else quote(key)
+    if len(key) <= SHOWN_TEXT_CHARS and _BARE_KEY.match(key):
+        return key
+    return _quote_short(key)
+
+
+def _format_int(value: int) -> str:
+    bits = abs(value).bit_length()
+    if bits <= 200:  # up to 61 digits: written out
+        return str(value)
+    return f"(a {'negative ' if value < 0 else ''}whole number of about {int(bits * math.log10(2)) + 1} digits)"
 
 
 def format_value(value: Any) -> str:
-    """``value`` spelled as a user writes it in a TOML design file or on the command line."""
+    """``value`` spelled as a user writes it in a TOML design file or on the command line.
+
+    Long values are shortened, so a message stays one short line whatever the file held:
+    text longer than :data:`SHOWN_TEXT_CHARS` characters by its first characters and its
+    length, huge whole numbers by their number of digits, lists and tables by their first 8
+    entries and 2 levels deep, and the whole at most :data:`SHOWN_VALUE_CHARS` characters.
+    """
+    shown = _format(value, 0)
+    if len(shown) > SHOWN_VALUE_CHARS:
+        shown = shown[:SHOWN_VALUE_CHARS - 4] + " ..."
+    return shown
+
+
+def _format(value: Any, depth: int) -> str:
     if value is None:
         return "(not set)"
     if isinstance(value, (bool,)) or type(value).__name__ == "bool_":
         return "true" if value else "false"
     if isinstance(value, numbers.Integral):
-        return str(int(value))
+        return _format_int(int(value))
     if isinstance(value, numbers.Real):
         v = float(value)
         if math.isnan(v):
@@ -56,16 +108,32 @@ def format_value(value: Any) -> str:
             return "inf" if v > 0 else "-inf"
         return repr(v)
     if isinstance(value, str):
-        return quote(value)
+        return _quote_short(value)
     if isinstance(value, bytes):
-        return repr(value)
+        return repr(value[:SHOWN_PREFIX_CHARS]) + (f"... ({len(value)} bytes)"
+                                                     if len(value) > SHOWN_PREFIX_CHARS else "")
     if isinstance(value, dict):
-        return "{" + ", ".join(f"{key_name(k)} = {format_value(v)}" for k, v in value.items()) + "}"
+        if depth >= 2:
+            return "{...}" if value else "{}"
+        items = list(value.items())
+        shown = ", ".join(f"{key_name(k)} = {_format(v, depth + 1)}" for k, v in items[:8])
+        return "{" + shown + (f", ... ({len(items)} entries)" if len(items) > 8 else "") + "}"
     if hasattr(value, "__iter__"):
         items = list(value)
-        shown = ", ".join(format_value(v) for v in items[:8])
+        if depth >= 2:
+            return "[...]" if items else "[]"
+        shown = ", ".join(_format(v, depth + 1) for v in items[:8])
         return "[" + shown + (f", ... ({len(items)} entries)" if len(items) > 8 else "") + "]"
-    return str(value)
+    text = str(value)
+    return text if len(text) <= SHOWN_TEXT_CHARS else text[:SHOWN_PREFIX_CHARS] + f"... ({len(text)} characters)"
+
+
+def _short_field(field: str) -> str:
+    """A field path for a message: a very long one with its middle left out."""
+    if len(field) <= SHOWN_FIELD_CHARS:
+        return field
+    half = SHOWN_FIELD_CHARS // 2 - 3
+    return field[:half] + " ... " + field[-half:]
 
 
 class PRSGeomError(Exception):
@@ -95,13 +163,14 @@ class DesignError(PRSGeomError, ValueError):
         self.rule = rule
         self.note = note
         shown = format_value(value)
-        super().__init__(f"{field} = {shown}{f' ({note})' if note else ''}: {rule}")
+        super().__init__(f"{_short_field(field)} = {shown}{f' ({note})' if note else ''}: {rule}")
 
     @classmethod
-    def about_file(cls, path: str, problem: str) -> "DesignError":
-        """An error about a whole input file (encoding, syntax): ``design file 'PATH': problem``."""
-        err = cls(f"design file {path!r}", path, problem)
-        err.args = (f"design file {path!r}: {problem}",)
+    def about_file(cls, path: str, problem: str, what: str = "design file") -> "DesignError":
+        """An error about a whole input file (kind, size, encoding, syntax):
+        ``design file 'PATH': problem`` (``what`` names the kind of file)."""
+        err = cls(f"{what} {path!r}", path, problem)
+        err.args = (f"{what} {path!r}: {problem}",)
         return err
 
     def __str__(self) -> str:

@@ -8,15 +8,25 @@ misspelt key silently ignored would build the wrong part).
 
 Floats are written with Python's shortest round-trip representation, so a written
 design reads back to an equal :class:`~prs_geom.model.design.PRSDesign`, bit for bit.
+
+Every file the user names (design, spectrum and ``design-pitch --target`` files) is read by
+:func:`read_user_file` and parsed by :func:`parse_document`, under the limits below
+(:data:`MAX_INPUT_BYTES`, :data:`MAX_TEXT_CHARS`, :data:`MAX_KEY_CHARS`,
+:data:`MAX_NESTING`, :data:`MIN_INT`/:data:`MAX_INT`, JSON keys given once): a file beyond
+them is bad input (:class:`~prs_geom.model.errors.DesignError`, exit 2), refused before it
+can cost much memory or time.
 """
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import math
 import os
 import re
 import secrets
+import stat
+import sys
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -257,11 +267,7 @@ def dumps_toml(design, comments: bool = True, header: str | None = None) -> str:
 
 def loads_toml(text: str, source: str = "<text>", kinds: dict[str, type] | None = None) -> PRSDesign:
     """A design from TOML text; ``source`` names the file in error messages."""
-    try:
-        data = tomllib.loads(text.removeprefix("\ufeff"))
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError.about_file(source, f"is not valid TOML: {exc}") from None
-    return design_from_dict(data, kinds)
+    return design_from_dict(parse_document(text.removeprefix("\ufeff"), source, "design file", "toml"), kinds)
 
 
 # --------------------------------------------------------------------------- JSON
@@ -280,17 +286,12 @@ def dumps_json(design) -> str:
 
 
 def loads_json(text: str, source: str = "<text>", kinds: dict[str, type] | None = None) -> PRSDesign:
-    """A design from JSON text; ``source`` names the file in error messages."""
-    try:
-        data = json.loads(text.removeprefix("\ufeff"))
-    except json.JSONDecodeError as exc:
-        raise DesignError.about_file(source, f"is not valid JSON: {exc}") from None
-    except RecursionError:
-        raise DesignError.about_file(source, "is nested too deeply to be a design file") from None
-    return design_from_dict(data, kinds)
+    """A design from JSON text; ``source`` names the file in error messages. A key given
+    twice in one object is an error (as in TOML), not the last one silently winning."""
+    return design_from_dict(parse_document(text.removeprefix("\ufeff"), source, "design file", "json"), kinds)
 
 
-def decode_text(raw: bytes, source: str) -> str:
+def decode_text(raw: bytes, source: str, what: str = "design file") -> str:
     """UTF-8 text of a design file, with or without a byte-order mark.
 
     Any other encoding is a :class:`DesignError` naming the file and the byte offset of the
@@ -300,33 +301,208 @@ def decode_text(raw: bytes, source: str) -> str:
                       (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16")):
         if raw.startswith(bom):
             raise DesignError.about_file(source, f"is not UTF-8: it starts with a {name} byte-order "
-                                                 f"mark; save it as UTF-8")
+                                                 f"mark; save it as UTF-8", what)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise DesignError.about_file(source, f"is not UTF-8 text: byte 0x{raw[exc.start]:02x} at byte "
-                                             f"offset {exc.start}; save it as UTF-8") from None
+                                             f"offset {exc.start}; save it as UTF-8", what) from None
     if "\x00" in text:
-        raise DesignError.about_file(source, f"is not text: NUL byte at byte offset {raw.index(0)}")
+        raise DesignError.about_file(source, f"is not text: NUL byte at byte offset {raw.index(0)}", what)
     return text.removeprefix("\ufeff")
 
 
-# --------------------------------------------------------------------------- files
-def read_input_text(path: Path, what: str) -> str:
-    """The UTF-8 text (:func:`decode_text`) of an input file the user named.
+# --------------------------------------------------------------------------- input limits
+#: Largest input file prs-geom reads (design, spectrum and target files), in bytes. Real
+#: files are a few kB (a 500-tooth design with every per-tooth list is under 100 kB). The
+#: size is checked on the opened file before reading, and at most this many bytes plus one
+#: are read, so a file that grows while it is read is refused too.
+MAX_INPUT_BYTES = 4 * 1024 * 1024
+#: Longest text value of an input file, in characters. The model's own rules are tighter
+#: (design names 1-64, material names 1-60 characters); this cap holds for every text value,
+#: so that no text of any length reaches a rule, a message or an output file.
+MAX_TEXT_CHARS = 1000
+#: Longest key of an input file, in characters (the longest key of a design file has 36).
+MAX_KEY_CHARS = 100
+#: Deepest nesting of tables and lists of an input file (a design file uses 3 levels, e.g.
+#: ``materials.screw.name``); deeper files are refused, and one too deep for the parser
+#: itself (a recursion error) is refused with the same message.
+MAX_NESTING = 32
+#: Whole numbers are 64-bit signed integers, as the TOML specification has them (JSON
+#: files are held to the same range); a larger number is written as a float (``1e20``).
+MIN_INT, MAX_INT = -(2 ** 63), 2 ** 63 - 1
 
-    A path that does not exist or is a folder is a :class:`DesignError` on ``what`` (e.g.
-    "design file"; bad input, exit 2); a file that exists but cannot be read is an
-    :class:`EnvironmentFailure` (exit 3)."""
-    if not path.exists():
-        raise DesignError(what, str(path), "does not exist")
-    if path.is_dir():
-        raise DesignError(what, str(path), f"is a folder, not a {what}")
+_NOT_REGULAR = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe (FIFO)"),
+                (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+                (stat.S_ISSOCK, "a socket"))
+
+
+def _size_text(n: int) -> str:
+    return f"{n / 1024 ** 2:g} MiB ({n} bytes)" if n >= 1024 ** 2 else f"{n} bytes"
+
+
+def _check_kind(st: os.stat_result, source: str, what: str, limit: int) -> None:
+    """Refuse what is not a regular file, or one larger than ``limit`` bytes."""
+    if not stat.S_ISREG(st.st_mode):
+        kind = next((name for test, name in _NOT_REGULAR if test(st.st_mode)), "not a regular file")
+        raise DesignError.about_file(source, f"is {kind}; a {what} must be a regular file", what)
+    if st.st_size > limit:
+        raise DesignError.about_file(source, f"is {_size_text(st.st_size)}, larger than the {_size_text(limit)} "
+                                             f"a {what} may have", what)
+
+
+def _open_error(exc: OSError, source: str, what: str) -> Exception:
+    """A path that names no file is bad input (exit 2); one that cannot be read here (a
+    permission, an I/O error) an :class:`EnvironmentFailure` (exit 3)."""
+    if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+        return DesignError.about_file(source, "does not exist", what)
+    if exc.errno in (errno.ELOOP, errno.ENAMETOOLONG, errno.ENXIO, errno.ENODEV):
+        return DesignError.about_file(source, f"cannot be opened: {exc.strerror or exc}", what)
+    return EnvironmentFailure(f"cannot read {source}: {exc.strerror or exc}")
+
+
+def read_user_file(path: str | os.PathLike[str], what: str = "design file",
+                   limit: int = MAX_INPUT_BYTES) -> bytes:
+    """The bytes of an input file the user named, read within bounds.
+
+    Only a regular file is read (a symlink is followed, and its target must be a regular
+    file): a folder, a named pipe (FIFO), a device or a socket is refused before anything is
+    read, and the file is opened non-blocking, so a FIFO without a writer cannot hang the
+    program. A file larger than ``limit`` bytes (:data:`MAX_INPUT_BYTES`) is refused by its
+    size, and at most ``limit + 1`` bytes are ever read (a file growing while it is read is
+    refused too). Errors are :class:`DesignError` naming ``what`` and the path (exit 2), or
+    :class:`EnvironmentFailure` for a file that exists but cannot be read here (exit 3).
+    """
+    source = os.fspath(path)
     try:
-        raw = path.read_bytes()
+        _check_kind(os.stat(source), source, what, limit)
+        fd = os.open(source, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+                     | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0))
     except OSError as exc:
-        raise EnvironmentFailure(f"cannot read {path}: {exc.strerror or exc}") from None
-    return decode_text(raw, str(path))
+        raise _open_error(exc, source, what) from None
+    try:
+        _check_kind(os.fstat(fd), source, what, limit)   # what was opened, not what was looked at
+        chunks: list[bytes] = []
+        total = 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 16, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+    except OSError as exc:
+        raise EnvironmentFailure(f"cannot read {source}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    if total > limit:
+        raise DesignError.about_file(source, f"has more than the {_size_text(limit)} a {what} may have "
+                                             f"(found while reading: it grew, or its size was not known)", what)
+    return b"".join(chunks)
+
+
+def read_input_text(path: Path, what: str) -> str:
+    """The UTF-8 text (:func:`decode_text`) of an input file the user named, read by
+    :func:`read_user_file` (regular files only, at most :data:`MAX_INPUT_BYTES`).
+
+    A path that does not exist, is not a regular file or is too large is a
+    :class:`DesignError` on ``what`` (e.g. "design file"; bad input, exit 2); a file that
+    exists but cannot be read is an :class:`EnvironmentFailure` (exit 3)."""
+    return decode_text(read_user_file(path, what), os.fspath(path), what)
+
+
+def _parse_text(text: str, source: str, what: str, fmt: str) -> tuple[Any, dict[int, list[str]]]:
+    """Parse TOML or JSON text; syntax errors, nesting too deep for the parser and whole
+    numbers too long to convert are :class:`DesignError` on the file. Also returns the keys
+    given more than once in a JSON object, by the ``id`` of the object."""
+    if len(text) > MAX_INPUT_BYTES:
+        raise DesignError.about_file(source, f"has {len(text)} characters, more than the "
+                                             f"{MAX_INPUT_BYTES} a {what} may have", what)
+    duplicates: dict[int, list[str]] = {}
+    name = "JSON" if fmt == "json" else "TOML"
+    try:
+        if fmt == "json":
+            def pairs_hook(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+                obj = dict(pairs)
+                if len(obj) != len(pairs):
+                    seen: set[str] = set()
+                    duplicates[id(obj)] = [k for k, _ in pairs if k in seen or seen.add(k)]
+                return obj
+
+            data = json.loads(text, object_pairs_hook=pairs_hook)
+        else:
+            data = tomllib.loads(text)
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise DesignError.about_file(source, f"is not valid {name}: {exc}", what) from None
+    except RecursionError:
+        raise DesignError.about_file(source, f"is nested too deeply: at most {MAX_NESTING} levels of tables "
+                                             f"and lists", what) from None
+    except ValueError as exc:
+        # the only other ValueError of both parsers: Python's limit on converting a long
+        # decimal string to an integer (sys.get_int_max_str_digits())
+        if "integer string conversion" in str(exc):
+            raise DesignError.about_file(
+                source, f"holds a whole number of more than {sys.get_int_max_str_digits()} digits (the "
+                        f"reader's limit); whole numbers are 64-bit, -2^63 to 2^63 - 1: write a larger "
+                        f"number as a float, e.g. 1e20", what) from None
+        raise DesignError.about_file(source, f"is not valid {name}: {str(exc)[:100]}", what) from None
+    return data, duplicates
+
+
+def check_document(data: Any, prefix: str = "", duplicates: dict[int, list[str]] | None = None) -> None:
+    """Check a parsed input file against the limits of every value: nesting at most
+    :data:`MAX_NESTING` levels, text at most :data:`MAX_TEXT_CHARS` characters, keys at
+    most :data:`MAX_KEY_CHARS`, whole numbers in :data:`MIN_INT` to :data:`MAX_INT`, and no
+    key given twice (``duplicates``, from a JSON parse). The first value beyond a limit, in
+    the order of the file, is a :class:`DesignError` naming its dotted path (after
+    ``prefix``)."""
+    duplicates = duplicates or {}
+    stack: list[tuple[Any, str, int]] = [(data, prefix, 0)]
+    while stack:
+        value, path, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            if depth > MAX_NESTING:
+                raise DesignError(path, value, f"is nested more than {MAX_NESTING} levels deep (tables and "
+                                               f"lists)")
+            children: list[tuple[Any, str, int]] = []
+            if isinstance(value, dict):
+                for key in duplicates.get(id(value), ())[:1]:
+                    raise DesignError(f"{path}.{key_name(key)}" if path else key_name(key), value[key],
+                                      "this key is given more than once in the same object; give it once "
+                                      "(the last one would silently win)")
+                for key, item in value.items():
+                    sub = f"{path}.{key_name(key)}" if path else key_name(key)
+                    if len(key) > MAX_KEY_CHARS:
+                        raise DesignError(sub, item, f"has a key of {len(key)} characters; keys have at most "
+                                                     f"{MAX_KEY_CHARS}")
+                    children.append((item, sub, depth + 1))
+            else:
+                children = [(item, f"{path}[{k}]", depth + 1) for k, item in enumerate(value)]
+            stack.extend(reversed(children))
+        elif isinstance(value, str):
+            if len(value) > MAX_TEXT_CHARS:
+                raise DesignError(path, value, f"is {len(value)} characters long; a text value has at most "
+                                               f"{MAX_TEXT_CHARS}")
+        elif isinstance(value, int) and not isinstance(value, bool):
+            if not MIN_INT <= value <= MAX_INT:
+                raise DesignError(path, value, "is outside the 64-bit whole numbers, -2^63 to 2^63 - 1: write a "
+                                               "larger number as a float, e.g. 1e20")
+
+
+def parse_document(text: str, source: str, what: str, fmt: str, prefix: str = "") -> Any:
+    """The parsed ``fmt`` (``"toml"`` or ``"json"``) text of an input file, checked by
+    :func:`check_document`; every problem is a :class:`DesignError` (exit 2)."""
+    data, duplicates = _parse_text(text, source, what, fmt)
+    check_document(data, prefix, duplicates)
+    return data
+
+
+def load_document(path: str | os.PathLike[str], what: str, prefix: str = "") -> Any:
+    """The checked contents of a ``.json`` (by its suffix) or TOML input file, read by
+    :func:`read_user_file` and parsed by :func:`parse_document`."""
+    source = os.fspath(path)
+    text = read_input_text(Path(source), what)
+    return parse_document(text, source, what, "json" if Path(source).suffix.lower() == ".json" else "toml",
+                          prefix)
 
 
 def load_design(path: str | Path, kinds: dict[str, type] | None = None) -> PRSDesign:
@@ -404,11 +580,9 @@ def load_spectrum(path: str | Path):
     from prs_geom.model.spectrum import spectrum_from_dict
     path = Path(path)
     text = read_input_text(path, "spectrum file")
+    data, duplicates = _parse_text(text, str(path), "spectrum file", "toml")
     try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DesignError("spectrum file", str(path), f"is not valid TOML: {exc}") from None
-    try:
+        check_document(data, "", duplicates)
         return spectrum_from_dict(data)
     except DesignError as exc:
         raise DesignError(f"spectrum file {str(path)!r}: {exc.field}", exc.value, exc.rule) from None

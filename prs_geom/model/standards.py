@@ -57,6 +57,33 @@ import math
 import re
 from bisect import bisect_left
 from dataclasses import dataclass
+from typing import Any
+
+from prs_geom.model.errors import DesignError
+
+
+class StandardTableError(DesignError):
+    """A look-up that leaves a standard table: a size beyond its range, a symbol, grade or
+    bore it does not hold. A design error (exit code 2, like every
+    :class:`~prs_geom.model.errors.DesignError`, and a ``ValueError``); the message names
+    the table, its range and the value that left it.
+
+    Attributes
+    ----------
+    table : str
+        The table, e.g. ``"ISO 286 tolerance grades"`` or ``"DIN 472"``.
+    value : Any
+        The value looked up.
+    lo, hi : float or None
+        The tabulated range of the value (mm) where the table has one.
+    """
+
+    def __init__(self, table: str, value: Any, message: str, lo: float | None = None,
+                 hi: float | None = None) -> None:
+        super().__init__(table, value, message)
+        self.args = (message,)
+        self.table, self.lo, self.hi = table, lo, hi
+
 
 # --- ISO 286 ---------------------------------------------------------------------------
 
@@ -123,6 +150,8 @@ DELTA_UM: dict[int, tuple[float, ...]] = {
 HOLE_LETTERS: tuple[str, ...] = ("F", "G", "H", "JS", "K", "N")
 SHAFT_LETTERS: tuple[str, ...] = ("e", "f", "g", "h", "js", "k", "m", "n", "p")
 GRADES: tuple[int, ...] = tuple(sorted(IT_GRADES_UM))
+#: How the errors name the ISO 286 table.
+ISO286_TABLE = "ISO 286 tolerance grades"
 _SYMBOL_RE = re.compile(r"^([A-Za-z]{1,2})(\d{1,2})$")
 
 
@@ -131,13 +160,16 @@ def size_range_index(nominal_mm: float) -> int:
 
     Raises
     ------
-    ValueError
-        For a size that is not a finite number in (0, 500] mm.
+    StandardTableError
+        For a size that is not a finite number in (0, 500] mm (ISO 286-1 tabulates the
+        tolerance grades and deviations held here up to 500 mm; the table ends there).
     """
     if isinstance(nominal_mm, bool) or not isinstance(nominal_mm, (int, float)) \
             or not math.isfinite(nominal_mm) or not 0 < nominal_mm <= SIZE_RANGE_UPPER_MM[-1]:
-        raise ValueError(f"ISO 286 nominal size {nominal_mm!r} mm is outside the table: it must be "
-                         f"over 0 up to and including {SIZE_RANGE_UPPER_MM[-1]:g} mm")
+        raise StandardTableError(
+            ISO286_TABLE, nominal_mm, f"ISO 286 nominal size {nominal_mm!r} mm is outside the table: it must be "
+                                      f"over 0 up to and including {SIZE_RANGE_UPPER_MM[-1]:g} mm", 0.0,
+            float(SIZE_RANGE_UPPER_MM[-1]))
     return bisect_left(SIZE_RANGE_UPPER_MM, nominal_mm)
 
 
@@ -148,9 +180,9 @@ def size_range_mm(nominal_mm: float) -> tuple[float, float]:
 
 def it_tolerance_um(grade: int, nominal_mm: float) -> float:
     """Standard tolerance IT``grade`` (um) for a nominal size (mm), ISO 286-1 Table 1."""
-    if grade not in IT_GRADES_UM:
-        raise ValueError(f"ISO 286 grade IT{grade!r} is not tabulated here; known: "
-                         f"IT{GRADES[0]}..IT{GRADES[-1]}")
+    if isinstance(grade, bool) or grade not in IT_GRADES_UM:
+        raise StandardTableError(ISO286_TABLE, grade, f"ISO 286 grade IT{grade!r} is not tabulated here; known: "
+                                                      f"IT{GRADES[0]}..IT{GRADES[-1]}")
     return float(IT_GRADES_UM[grade][size_range_index(nominal_mm)])
 
 
@@ -218,24 +250,28 @@ def _parse_symbol(symbol: str) -> tuple[str, int, bool]:
     text = symbol.strip() if isinstance(symbol, str) else symbol
     m = _SYMBOL_RE.match(text) if isinstance(text, str) else None
     if m is None:
-        raise ValueError(f"ISO 286 fit symbol {symbol!r}: expected a deviation letter and a grade "
-                         f"number, e.g. 'H7' (hole, capital) or 'g6' (shaft, lower case)")
+        raise StandardTableError(ISO286_TABLE, symbol,
+                                 f"ISO 286 fit symbol {symbol!r}: expected a deviation letter and a grade "
+                                 f"number, e.g. 'H7' (hole, capital) or 'g6' (shaft, lower case)")
     letter, grade = m.group(1), int(m.group(2))
     if letter.isupper():
         is_hole, known = True, HOLE_LETTERS
     elif letter.islower():
         is_hole, known = False, SHAFT_LETTERS
     else:
-        raise ValueError(f"ISO 286 fit symbol {symbol!r}: letter {letter!r} mixes cases; holes are "
-                         f"capital ({', '.join(HOLE_LETTERS)}), shafts lower case "
-                         f"({', '.join(SHAFT_LETTERS)})")
+        raise StandardTableError(ISO286_TABLE, symbol,
+                                 f"ISO 286 fit symbol {symbol!r}: letter {letter!r} mixes cases; holes are "
+                                 f"capital ({', '.join(HOLE_LETTERS)}), shafts lower case "
+                                 f"({', '.join(SHAFT_LETTERS)})")
     if letter not in known:
         kind = "hole" if is_hole else "shaft"
-        raise ValueError(f"ISO 286 fit symbol {symbol!r}: unknown {kind} deviation letter {letter!r}; "
-                         f"known: {', '.join(known)}")
+        raise StandardTableError(ISO286_TABLE, symbol,
+                                 f"ISO 286 fit symbol {symbol!r}: unknown {kind} deviation letter {letter!r}; "
+                                 f"known: {', '.join(known)}")
     if grade not in IT_GRADES_UM:
-        raise ValueError(f"ISO 286 fit symbol {symbol!r}: grade IT{grade} is not tabulated; known: "
-                         f"IT{GRADES[0]}..IT{GRADES[-1]}")
+        raise StandardTableError(ISO286_TABLE, symbol,
+                                 f"ISO 286 fit symbol {symbol!r}: grade IT{grade} is not tabulated; known: "
+                                 f"IT{GRADES[0]}..IT{GRADES[-1]}")
     return letter, grade, is_hole
 
 
@@ -280,9 +316,9 @@ def tolerance_zone(nominal_mm: float, symbol: str) -> ToleranceZone:
 
     Raises
     ------
-    ValueError
+    StandardTableError
         For an unknown letter or grade or a size outside the table, naming the value and
-        the rule.
+        the rule (a ``ValueError`` and a design error, exit code 2).
     """
     letter, grade, _ = _parse_symbol(symbol)
     k = size_range_index(nominal_mm)
@@ -345,12 +381,14 @@ class Fit:
 
     def __post_init__(self) -> None:
         if not _parse_symbol(self.hole)[2]:
-            raise ValueError(f"ISO 286 fit '{self}': the hole class {self.hole!r} must start with a "
-                             f"capital letter ({', '.join(HOLE_LETTERS)}); the hole comes first, "
-                             f"e.g. 'H7/g6'")
+            raise StandardTableError(ISO286_TABLE, str(self),
+                                     f"ISO 286 fit '{self}': the hole class {self.hole!r} must start with a "
+                                     f"capital letter ({', '.join(HOLE_LETTERS)}); the hole comes first, "
+                                     f"e.g. 'H7/g6'")
         if _parse_symbol(self.shaft)[2]:
-            raise ValueError(f"ISO 286 fit '{self}': the shaft class {self.shaft!r} must start with a "
-                             f"lower-case letter ({', '.join(SHAFT_LETTERS)}), e.g. 'H7/g6'")
+            raise StandardTableError(ISO286_TABLE, str(self),
+                                     f"ISO 286 fit '{self}': the shaft class {self.shaft!r} must start with a "
+                                     f"lower-case letter ({', '.join(SHAFT_LETTERS)}), e.g. 'H7/g6'")
         object.__setattr__(self, "hole", self.hole.strip())
         object.__setattr__(self, "shaft", self.shaft.strip())
 
@@ -362,7 +400,7 @@ class Fit:
         """Read ``"H7/g6"`` (hole class / shaft class)."""
         parts = text.split("/") if isinstance(text, str) else []
         if len(parts) != 2:
-            raise ValueError(f"ISO 286 fit {text!r}: expected 'hole/shaft', e.g. 'H7/g6'")
+            raise StandardTableError(ISO286_TABLE, text, f"ISO 286 fit {text!r}: expected 'hole/shaft', e.g. 'H7/g6'")
         return cls(parts[0].strip(), parts[1].strip())
 
     def limits(self, nominal_mm: float) -> FitLimits:
@@ -497,6 +535,8 @@ _DIN472_ROWS: tuple[tuple[float, float, float | None, float, float, float, float
     (195, 4.0, 204.5, 14.2, 13.8, 4.0, 200.0, 4.15, 7.5),
     (200, 4.0, 209.5, 14.2, 14.0, 4.0, 205.0, 4.15, 7.5),
 )
+#: How the errors name the DIN 472 table.
+DIN472_TABLE = "DIN 472 retaining rings"
 #: Upper deviation (mm) of the groove diameter d2 where a source prints it, as
 #: (first d1, last d1, upper); the lower deviation is 0.
 _DIN472_D2_UPPER_MM: tuple[tuple[float, float, float], ...] = ((8, 9, 0.09), (10, 18, 0.11))
@@ -597,13 +637,14 @@ def din472_ring(bore_mm: float) -> RetainingRing:
 
     Raises
     ------
-    ValueError
+    StandardTableError
         If ``bore_mm`` is not a table size (exact sizes only); the message lists the
-        nearest sizes.
+        nearest sizes and the table's range.
     """
     sizes = din472_sizes()
     if isinstance(bore_mm, bool) or not isinstance(bore_mm, (int, float)) or not math.isfinite(bore_mm):
-        raise ValueError(f"DIN 472 bore {bore_mm!r} must be a finite number (mm)")
+        raise StandardTableError(DIN472_TABLE, bore_mm, f"DIN 472 bore {bore_mm!r} must be a finite number (mm)",
+                                 sizes[0], sizes[-1])
     for row in _DIN472_ROWS:
         if abs(row[0] - bore_mm) < 1e-9:
             d1, s, d3, a, b, d5, d2, m, n = row
@@ -615,5 +656,6 @@ def din472_ring(bore_mm: float) -> RetainingRing:
     below = [d for d in sizes if d < bore_mm][-1:]
     above = [d for d in sizes if d > bore_mm][:1]
     near = ", ".join(f"{d:g}" for d in below + above)
-    raise ValueError(f"DIN 472 has no ring for a {bore_mm:g} mm bore (table sizes only, "
-                     f"{sizes[0]:g}-{sizes[-1]:g} mm); nearest sizes: {near} mm")
+    raise StandardTableError(DIN472_TABLE, bore_mm, f"DIN 472 has no ring for a {bore_mm:g} mm bore (table sizes "
+                                                    f"only, {sizes[0]:g}-{sizes[-1]:g} mm); nearest sizes: {near} mm",
+                             sizes[0], sizes[-1])

@@ -16,8 +16,27 @@ from prs_geom.model.errors import DesignError, format_value
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 #: Largest accepted size (mm) of a diameter, radius or pitch: a sanity bound, since a
 #: value above 10 m is a unit mistake (lengths are in mm), and the geometry code needs
-#: finite, representable sizes. Lengths along the axis are bounded by the memory guard.
+#: finite, representable sizes.
 MAX_SIZE_MM = 1e4
+#: Smallest accepted size (mm) of a diameter, radius, pitch, width or thickness: 10 um, below
+#: any machined feature. The model rounds defaulted diameters to 0.1 um, so a smaller size
+#: vanishes in that rounding (a thread of pitch 1e-5 mm gets crest = root), and the contact,
+#: tooth and body formulas divide by sizes (a size of 5e-324 mm underflows to zero there).
+MIN_SIZE_MM = 1e-2
+#: Largest accepted length along the axis (mm): 10 km, a thousand times the longest rolling
+#: screws made. Physical lengths are the business of the plausibility warnings (above 12 m)
+#: and, for meshing, of the memory guard (exit 3 naming the field, far shorter); this bound
+#: keeps the ratings that need no mesh (critical speed and buckling go as 1/L^2) finite and
+#: nonzero, with a wide margin (1e308 mm overflowed L^2).
+MAX_LENGTH_MM = 1e7
+#: Accepted range (N) of an axial force (design load, preload, duty loads). Below 1 N the
+#: elastic approach of the teeth is nanometres (the load model's Newton system loses its
+#: conditioning at about 1e-2 N on the standard design, and micrometre pitch corrections
+#: decide everything). 1e10 N is a thousand times the largest plausible load (validate warns
+#: above 1e7 N): an absurd load still gets its verdicts (static safety, buckling FAIL) rather
+#: than a refusal, and the life ((C / F)^3, 1e308 N made it 0 and the gain 0 / 0) and the Hertz
+#: pressures stay finite for any design.
+LOAD_RANGE_N = (1.0, 1e10)
 
 
 def real(fld: str, value: Any) -> float:
@@ -65,11 +84,25 @@ def choice(fld: str, value: Any, options: tuple[str, ...]) -> str:
 
 
 def size(fld: str, value: Any) -> float:
-    """A positive size in mm, at most :data:`MAX_SIZE_MM`."""
+    """A size in mm from :data:`MIN_SIZE_MM` to :data:`MAX_SIZE_MM`."""
     v = positive(fld, value)
     if v > MAX_SIZE_MM:
         raise DesignError(fld, value, f"must be at most {MAX_SIZE_MM:g} mm (10 m; sizes are in mm)")
+    if v < MIN_SIZE_MM:
+        raise DesignError(fld, value, f"must be at least {MIN_SIZE_MM:g} mm (10 um; sizes are in mm)")
     return v
+
+
+def length(fld: str, value: Any) -> float:
+    """A length along the axis in mm, from :data:`MIN_SIZE_MM` to :data:`MAX_LENGTH_MM`."""
+    return bounded(fld, value, MIN_SIZE_MM, MAX_LENGTH_MM,
+                   f"must be from {MIN_SIZE_MM:g} mm to {MAX_LENGTH_MM:g} mm (10 km; lengths are in mm)", positive)
+
+
+def force(fld: str, value: Any) -> float:
+    """An axial force in N within :data:`LOAD_RANGE_N`."""
+    lo, hi = LOAD_RANGE_N
+    return bounded(fld, value, lo, hi, f"must be from {lo:g} N to {hi:g} N (forces are in N)", positive)
 
 
 def optional_positive(fld: str, value: Any) -> float | None:
@@ -80,6 +113,16 @@ def optional_positive(fld: str, value: Any) -> float | None:
 def optional_size(fld: str, value: Any) -> float | None:
     """None (not given: a default applies) or a size (:func:`size`)."""
     return None if value is None else size(fld, value)
+
+
+def optional_length(fld: str, value: Any) -> float | None:
+    """None (not given: a default applies) or a length along the axis (:func:`length`)."""
+    return None if value is None else length(fld, value)
+
+
+def optional_force(fld: str, value: Any) -> float | None:
+    """None (not given: a default applies) or a force (:func:`force`)."""
+    return None if value is None else force(fld, value)
 
 
 def pitch_list(fld: str, value: Any) -> tuple[float, ...] | None:
