@@ -46,7 +46,8 @@ import threading
 import time
 from typing import Any, Callable
 
-__all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "worker_init"]
+__all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "worker_init",
+           "signals_ignored"]
 
 #: Environment variable: number of worker processes of a build (0 = serial).
 WORKERS_ENV = "PRS_GEOM_WORKERS"
@@ -278,7 +279,7 @@ class Background:
         the process group each worker hands its copy to this process, and a second
         KeyboardInterrupt raised in the middle of the clean-up would cut it short."""
         pool, self._pool = self._pool, None
-        with _signals_ignored(kill):
+        with signals_ignored(kill):
             if pool is not None and kill:
                 _kill_pool(pool)
             if self._progress_dir is not None:
@@ -314,7 +315,7 @@ def _alive(pid: int) -> bool:
     return True
 
 
-class _signals_ignored:
+class signals_ignored:
     """SIGINT and SIGTERM ignored while the block runs (main thread only; elsewhere, or
     with ``active`` false, nothing changes)."""
 

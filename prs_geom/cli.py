@@ -147,15 +147,11 @@ def cmd_build(args: argparse.Namespace) -> int:
     from prs_geom.exports.output import legacy_manifest
 
     # every precondition before any work: the output folder (edited files need --force; the
-    # design file may lie inside it), the optional extra, the memory (in build())
+    # design file may lie inside it) here, the optional extra and the memory in build()
     check_output_dir(out, force=args.force, keep=_inside(args.design, out))
     if legacy_manifest(out):
         print(f"warning: {out} was written by an older prs-geom (its manifest records names, not "
               f"contents): it is replaced this once without checking for edited files", file=sys.stderr)
-    if args.step:
-        from prs_geom.exports.step import require_ocp
-
-        require_ocp()
     progress = args.progress
     from prs_geom.pipeline import BuildOptions
 

@@ -309,29 +309,6 @@ def _run_joblib(task: Callable[[Any], Any], payloads: list[Any], n_jobs: int,
     return out
 
 
-class _children_ignore_interrupts:
-    """SIGINT and SIGTERM ignored in this process while a local Dask cluster starts, so that
-    its nanny and worker processes inherit the ignored signals: a Ctrl-C to the process group
-    then reaches only this process, which closes the cluster, instead of a hundred lines of
-    tracebacks from the cluster's processes. A Ctrl-C during those one or two seconds of
-    start-up is lost (press it again); outside the main thread nothing changes."""
-
-    def __enter__(self) -> None:
-        import signal
-        import threading
-
-        self._previous: dict[Any, Any] = {}
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._previous[sig] = signal.signal(sig, signal.SIG_IGN)
-
-    def __exit__(self, *exc: object) -> None:
-        import signal
-
-        for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
-
-
 def local_cluster_options(n_workers: int) -> dict[str, Any]:
     """Keyword arguments of the ``distributed.LocalCluster`` that ``scheduler="local"`` starts:
     ``n_workers`` processes of one thread each (one chunk at a time per process, like the
@@ -368,7 +345,13 @@ def _run_dask(task: Callable[[Any], Any], payloads: list[Any], backend: Backend,
         if backend.scheduler == "client":
             client = scheduler
         elif backend.scheduler == "local":
-            with _children_ignore_interrupts():
+            # SIGINT and SIGTERM ignored while the cluster starts, so that its nanny and worker
+            # processes inherit the ignored signals: a Ctrl-C to the process group then reaches
+            # only this process, which closes the cluster, instead of a hundred lines of
+            # tracebacks from the cluster's processes (one during the start-up is lost)
+            from prs_geom.background import signals_ignored
+
+            with signals_ignored(True):
                 cluster = distributed.LocalCluster(**local_cluster_options(backend.workers or 1))
             owned.append(cluster)
             client = distributed.Client(cluster, set_as_default=False)

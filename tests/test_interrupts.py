@@ -212,7 +212,7 @@ def test_ctrl_c_to_a_study_prints_one_line(tmp_path, where):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             preexec_fn=child_setup, cwd=tmp_path)
     # loky: two workers; Dask: two nannies and their two workers, and a Ctrl-C while the
-    # cluster starts is lost by design (scaleout._children_ignore_interrupts): wait for all
+    # cluster starts is lost by design (scaleout, background.signals_ignored): wait for all
     mark = "spawn_main" if where[0] == "--dask-workers" else "popen_loky"
     need = 4 if where[0] == "--dask-workers" else 2
     try:
