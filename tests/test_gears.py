@@ -1,5 +1,6 @@
 """Roller end spur gears and nut ring gears: involute geometry, measurements, pair checks,
-phasing, 2D clearance and meshes (prs_geom.geometry.gears, prs_geom.mesh.gears).
+phasing, 2D clearance and meshes (prs_geom.geometry.gears, gear_pair, gear_checks, gear_phasing,
+planar, prs_geom.mesh.gears).
 
 Every number is checked against something computed another way: the involute as an
 unwrapped string, published worked examples, numerical measurements on the outline
@@ -14,10 +15,12 @@ import pytest
 
 from prs_geom.geometry import gears as G
 from prs_geom.geometry.frames import carrier_angles, roller_spin
-from prs_geom.geometry.gears import (GearPair, SpurGear, default_gear_pair, internal_pair_checks, involute,
-                                     inverse_involute, mesh_phase, min_clearance_2d, phasing_divisible,
-                                     pinion_transform, polygon_area, roller_gear_phasing, sweep_clearance,
-                                     transform_2d)
+from prs_geom.geometry.gear_checks import (internal_pair_checks, pinion_transform, standard_centre_distance,
+                                           sweep_clearance)
+from prs_geom.geometry.gear_pair import GearPair, default_gear_pair
+from prs_geom.geometry.gear_phasing import mesh_phase, phasing_divisible, roller_gear_phasing
+from prs_geom.geometry.gears import SpurGear, involute, inverse_involute
+from prs_geom.geometry.planar import min_clearance_2d, point_segment_distance, polygon_area, transform_2d
 from prs_geom.mesh.gears import gear_mesh, star_shaped
 from prs_geom.model.design import PRSDesign, Roller, Screw, default_design
 from prs_geom.model.errors import DesignError
@@ -147,7 +150,7 @@ def test_radii_and_thickness_formulas():
     assert ring.tip_radius_mm == pytest.approx(80 - 2 * 0.75)     # x < 0 moves the ring tip out
     assert ring.root_radius_mm == pytest.approx(80 + 2 * 1.5)
     # ISO sign: x1 + x2 = 0 keeps the standard centre distance
-    assert G.standard_centre_distance(g, ring) == pytest.approx(50.0, abs=1e-12)
+    assert standard_centre_distance(g, ring) == pytest.approx(50.0, abs=1e-12)
 
 
 def test_tooth_thickness_and_chord_against_published_example():
@@ -208,7 +211,7 @@ def test_outline_chord_error_within_tolerance(name, tol):
     c = g.involute_polar(np.clip(rb * np.sqrt(1 + tt ** 2), rb, None))
     rr = rb * np.sqrt(1 + tt ** 2)
     curve = np.stack([rr * np.cos(c), rr * np.sin(c)], -1)             # (segments, samples, 2)
-    dev = G._point_segment_distance(curve, inv[:-1, None, :], inv[1:, None, :])
+    dev = point_segment_distance(curve, inv[:-1, None, :], inv[1:, None, :])
     assert dev.max() <= tol
     assert dev.max() > 0.2 * tol                                       # not grossly oversampled
     # the whole tooth (fillet, tip and root arcs too) against a 100x finer outline

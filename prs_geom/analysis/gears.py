@@ -13,8 +13,10 @@ from typing import Any
 import numpy as np
 
 from prs_geom.geometry.frames import carrier_angles, roller_spin
-from prs_geom.geometry.gears import (GearPair, InternalPairChecks, RollerGearPhasing, SpurGear, SweepClearance,
-                                     design_gear_pair, phasing_divisible, roller_gear_phasing, sweep_clearance)
+from prs_geom.geometry.gear_checks import InternalPairChecks, SweepClearance, sweep_clearance
+from prs_geom.geometry.gear_pair import GearPair, design_gear_pair
+from prs_geom.geometry.gear_phasing import RollerGearPhasing, phasing_divisible, roller_gear_phasing
+from prs_geom.geometry.gears import SpurGear
 from prs_geom.model.design import PRSDesign
 
 #: Carrier positions of the running check: one ring tooth pitch of carrier travel in this

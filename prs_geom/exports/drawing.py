@@ -380,7 +380,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     if part in ("roller", "nut") and getattr(design, part).pitch_list_mm is not None:
         notes.append("Graded pitch: see machining sheet for the pitch list")
     if part in ("roller", "nut"):
-        from prs_geom.geometry.gears import design_gear_pair
+        from prs_geom.geometry.gear_pair import design_gear_pair
 
         pair = design_gear_pair(design)
         if pair is not None:

@@ -187,7 +187,7 @@ def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
     r1 = 0.5 * d1
     pts = [(0.0, R), (length, R), (length, r1), (g_out, r1), (g_out, 0.5 * d2), (g_in, 0.5 * d2), (g_in, r1)]
     if w > 0.0:     # around the ring gear the nut's material starts at the gear's root circle
-        from prs_geom.geometry.gears import design_gear_pair
+        from prs_geom.geometry.gear_pair import design_gear_pair
 
         gear_root = design_gear_pair(design).ring.root_radius_mm
         pts += [(w, r1), (w, gear_root), (0.0, gear_root)]

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 from prs_geom.geometry.profiles import ThreadProfile
 
+__all__ = ["DatumMark", "datum_mark"]
+
 
 @dataclass(frozen=True)
 class DatumMark:

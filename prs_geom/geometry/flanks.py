@@ -28,15 +28,10 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from prs_geom.geometry.planar import point_segment_distance
 from prs_geom.geometry.primitives import CircleArc, EllipseArc, Segment
 
-
-def segment_distance(u: NDArray, r: NDArray, u0: float, r0: float, u1: float, r1: float) -> NDArray:
-    """Distance (mm) in the (u, r) plane from points (u, r) to the segment (u0, r0)-(u1, r1)."""
-    du, dr = u1 - u0, r1 - r0
-    ll = du * du + dr * dr
-    s = np.clip(((u - u0) * du + (r - r0) * dr) / ll, 0.0, 1.0) if ll > 0 else np.zeros_like(u)
-    return np.hypot(u - (u0 + s * du), r - (r0 + s * dr))
+__all__ = ["ArcFlank", "FlankShape", "StraightFlank"]
 
 
 @runtime_checkable
@@ -165,7 +160,7 @@ class StraightFlank:
                        r_crest: float) -> NDArray[np.float64]:
         tr = float(self.half_width(r_root, quarter)) / cos_lead
         tc = float(self.half_width(r_crest, quarter)) / cos_lead
-        return segment_distance(u, r, tc, r_crest, tr, r_root)
+        return point_segment_distance(np.stack(np.broadcast_arrays(u, r), axis=-1), (tc, r_crest), (tr, r_root))
 
     def normal_outline(self, quarter: float, r_root: float, r_crest: float) -> list:
         wr, wc = self.drawing_half_width(r_root, quarter), self.drawing_half_width(r_crest, quarter)

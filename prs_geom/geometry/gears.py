@@ -1,5 +1,13 @@
 """Involute spur gears of the roller ends and internal ring gears of the nut (pure math).
 
+Owns one gear: :class:`SpurGear` (sizes, involute flank, measurements), the involute
+function and its inverse, and the construction of the gear's outline (involute, root fillet,
+tip and root circles). The pair of a roller gear and a ring gear and its sizing are in
+:mod:`~prs_geom.geometry.gear_pair`, the pair's checks and running clearance in
+:mod:`~prs_geom.geometry.gear_checks`, the phasing of the rollers' gears in
+:mod:`~prs_geom.geometry.gear_phasing`, the generic 2D polygon tools in
+:mod:`~prs_geom.geometry.planar`.
+
 numpy only: no I/O, no mesh library. See docs/theory/gears.md for the formulas, their
 sources and the conventions; the essentials are repeated here.
 
@@ -38,42 +46,26 @@ Tooth forms
   modelled; the pair checks verify that contact ends inside the involute (r <= r_Ff) and
   that the pinion tip keeps its root clearance, which together keep the pinion clear of any
   ring fillet that stays inside the zone between r_Ff and the root circle.
-
-Phasing
--------
-A pinion (roller gear) whose centre is at distance a on the ray at carrier angle psi from
-the ring centre is described, like a roller (docs/theory/conventions.md "Roller placement"),
-by its spin chi about its own axis **relative to its line of centres**:
-T = R_z(psi) Tr(a, 0, 0) R_z(chi). ``mesh_phase`` returns the spin that centres its teeth
-in the ring's tooth spaces: chi = pi / z_p - psi z_r / z_p (mod 2 pi / z_p).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Callable, Sequence
+from typing import Any, Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from prs_geom.geometry.planar import frozen_float64, point_segment_distance
 from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import integer, positive, real
 
-#: Standard modules (mm), ascending, that the default sizing picks from: ISO 54:1996 first
-#: choice from 1 mm, and below 1 mm the values 0.3, 0.4, 0.5, 0.6, 0.8 of the fine-module
-#: series (DIN 780).
-ISO54_MODULES_MM: tuple[float, ...] = (0.3, 0.4, 0.5, 0.6, 0.8, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0,
-                                       4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0)
+__all__ = ["DEFAULT_FACE_WIDTH_MM", "ISO53_A_TIP_RADIUS", "SpurGear", "involute", "inverse_involute"]
+
 #: Tip rounding radius of the generating rack / root fillet radius of the basic rack
 #: profile, in modules (ISO 53:1998 profile A: rho_fP = 0.38 m).
 ISO53_A_TIP_RADIUS: float = 0.38
-#: Total circumferential backlash (mm) of a default roller-gear / ring-gear pair, split
-#: equally between the two gears as tooth thinning.
-DEFAULT_TOTAL_BACKLASH_MM: float = 0.04
-#: Ring-gear addendum coefficients tried by :func:`default_gear_pair`, longest first: the
-#: usual tip shortening of internal gears that keeps the ring tip off the pinion's fillet.
-RING_ADDENDUM_STEPS: tuple[float, ...] = (1.0, 0.95, 0.9, 0.85, 0.8, 0.75, 0.7, 0.65, 0.6)
 #: Default face width (mm) of a gear: 2 thread pitches of the default design, the length of
 #: the simplified end gears in the assembly (prs_geom/mesh/assembly.py).
 DEFAULT_FACE_WIDTH_MM: float = 4.0
@@ -110,27 +102,6 @@ def inverse_involute(value: ArrayLike) -> NDArray[np.float64] | float:
         a = a_new
     return float(a) if a.ndim == 0 else a
 
-
-def transform_2d(angle_rad: float, tx: float = 0.0, ty: float = 0.0) -> NDArray[np.float64]:
-    """3x3 homogeneous transform: rotation by ``angle_rad`` about the origin, then translation."""
-    c, s = math.cos(angle_rad), math.sin(angle_rad)
-    return np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]])
-
-
-def _apply(T: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
-    return pts @ T[:2, :2].T + T[:2, 2]
-
-
-def _point_segment_distance(p: NDArray, a: NDArray, b: NDArray) -> NDArray[np.float64]:
-    """Distance from points p to segments a-b (all (..., 2), broadcast)."""
-    ab = b - a
-    L2 = np.einsum("...i,...i->...", ab, ab)
-    t = np.einsum("...i,...i->...", p - a, ab) / np.where(L2 > 0, L2, 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    d = p - (a + t[..., None] * ab)
-    return np.sqrt(np.einsum("...i,...i->...", d, d))
-
-
 def _refine(fun: Callable[[NDArray], NDArray], t0: float, t1: float, tol: float,
             n0: int = 4) -> NDArray[np.float64]:
     """Parameters t0..t1 such that the polyline through fun(t) deviates <= tol from the curve.
@@ -143,7 +114,7 @@ def _refine(fun: Callable[[NDArray], NDArray], t0: float, t1: float, tol: float,
     for _ in range(60):
         p = fun(t)
         tm = 0.5 * (t[:-1] + t[1:])
-        dev = _point_segment_distance(fun(tm), p[:-1], p[1:])
+        dev = point_segment_distance(fun(tm), p[:-1], p[1:])
         bad = dev > 0.5 * tol
         if not bad.any():
             return t
@@ -158,7 +129,6 @@ def _arc_steps(radius: float, span: float, tol: float) -> int:
     c = 1.0 - tol / radius
     dmax = 2.0 * math.acos(c) if c > -1.0 else math.pi
     return max(1, math.ceil(span / dmax))
-
 
 # --------------------------------------------------------------------------- the gear
 @dataclass(frozen=True)
@@ -630,12 +600,6 @@ def _undercut_join(g: SpurGear) -> tuple[float, float]:
     return float(hi), float(np.hypot(*p))
 
 
-def _frozen(a: NDArray) -> NDArray[np.float64]:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    a.flags.writeable = False
-    return a
-
-
 @lru_cache(maxsize=64)
 def _right_flank(g: SpurGear, tol: float) -> tuple[NDArray[np.float64], int]:
     """Right flank of tooth 0, root to tip: (points, index of the first involute point)."""
@@ -650,14 +614,14 @@ def _right_flank(g: SpurGear, tol: float) -> tuple[NDArray[np.float64], int]:
         it = _refine(inv, t_join, t_tip, tol)
         invp = inv(it)                              # invp[0] is fil[-1]: keep the involute one
         pts = np.concatenate([fil[:-1], invp])
-        return _frozen(pts), len(fil) - 1
+        return frozen_float64(pts), len(fil) - 1
     # internal: root circle -> circular fillet -> involute down to the tip circle
     t_F = _roll(g, g.form_radius_mm)
     it = _refine(inv, t_F, t_tip, tol)[::-1]     # root side first
     invp = inv(it)
     fil = _ring_fillet(g, tol)
     pts = np.concatenate([fil[:-1], invp]) if len(fil) else invp
-    return _frozen(pts), max(len(fil) - 1, 0)
+    return frozen_float64(pts), max(len(fil) - 1, 0)
 
 
 def _ring_fillet(g: SpurGear, tol: float) -> NDArray[np.float64]:
@@ -729,679 +693,4 @@ def _outline(g: SpurGear, tol: float) -> NDArray[np.float64]:
     c, s = np.cos(ang), np.sin(ang)
     rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)   # (z, 2, 2)
     pts = np.einsum("kij,nj->kni", rot, tooth).reshape(-1, 2)
-    return _frozen(pts)
-
-
-def polygon_area(pts: ArrayLike) -> float:
-    """Signed area (mm^2) of a closed polygon (shoelace); > 0 counter-clockwise."""
-    p = np.asarray(pts, dtype=float)
-    q = np.roll(p, -1, axis=0)
-    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
-
-
-# --------------------------------------------------------------------------- pair checks
-@dataclass(frozen=True)
-class CheckResult:
-    """One check of a gear pair: the number, the limit and the rule."""
-
-    name: str
-    passed: bool
-    value: float
-    limit: float
-    unit: str
-    rule: str
-
-
-@dataclass(frozen=True)
-class InternalPairChecks:
-    """Geometry and checks of a pinion (roller gear) meshing inside a ring (nut gear).
-
-    Attributes
-    ----------
-    centre_distance_mm : float
-        Working centre distance a (mm).
-    working_pressure_angle_deg : float
-        alpha_w, cos alpha_w = (r_b2 - r_b1) / a.
-    working_pitch_radii_mm : tuple[float, float]
-        r_w1 = a z1 / (z2 - z1), r_w2 = a z2 / (z2 - z1).
-    contact_ratio : float
-        Transverse contact ratio epsilon_alpha.
-    backlash_circumferential_mm, backlash_normal_mm : float
-        Backlash present at a: circumferential on the working pitch circles, and along the line
-        of action (= circumferential x cos alpha_w).
-    start_active_radius_pinion_mm, end_active_radius_ring_mm : float
-        Radii where the path of contact starts on the pinion (ring tip) and ends on the ring
-        (pinion tip).
-    items : tuple[CheckResult, ...]
-        The checks; ``passed`` is True when all pass.
-    """
-
-    centre_distance_mm: float
-    working_pressure_angle_deg: float
-    working_pitch_radii_mm: tuple[float, float]
-    contact_ratio: float
-    backlash_circumferential_mm: float
-    backlash_normal_mm: float
-    start_active_radius_pinion_mm: float
-    end_active_radius_ring_mm: float
-    items: tuple[CheckResult, ...]
-
-    @property
-    def passed(self) -> bool:
-        return all(c.passed for c in self.items)
-
-    @property
-    def failed(self) -> tuple[str, ...]:
-        return tuple(c.name for c in self.items if not c.passed)
-
-    def __getitem__(self, name: str) -> CheckResult:
-        for c in self.items:
-            if c.name == name:
-                return c
-        raise KeyError(name)
-
-
-def _pair_compatible(pinion: SpurGear, ring: SpurGear) -> None:
-    if pinion.internal:
-        raise DesignError("pinion.internal", pinion.internal, "the pinion (roller gear) must be external")
-    if not ring.internal:
-        raise DesignError("ring.internal", ring.internal, "the ring (nut gear) must be internal")
-    if abs(pinion.module_mm - ring.module_mm) > 1e-12 * ring.module_mm:
-        raise DesignError("ring.module_mm", ring.module_mm, f"must equal the pinion module {pinion.module_mm!r}")
-    if abs(pinion.pressure_angle_deg - ring.pressure_angle_deg) > 1e-12:
-        raise DesignError("ring.pressure_angle_deg", ring.pressure_angle_deg,
-                          f"must equal the pinion pressure angle {pinion.pressure_angle_deg!r}")
-    if ring.teeth <= pinion.teeth:
-        raise DesignError("ring.teeth", ring.teeth, f"must exceed the pinion teeth {pinion.teeth}")
-
-
-def standard_centre_distance(pinion: SpurGear, ring: SpurGear) -> float:
-    """Zero-backlash centre distance of the pair (mm): a = m (z2 - z1) cos a / (2 cos a_w),
-    inv a_w = inv a - 2 tan a (x1 + x2) / (z2 - z1) (ISO 21771 signs); equals m (z2 - z1)/2
-    when x1 + x2 = 0. Thinning for backlash does not move it."""
-    _pair_compatible(pinion, ring)
-    a, m = pinion.alpha, pinion.module_mm
-    dz = ring.teeth - pinion.teeth
-    inv_w = involute(a) - 2.0 * math.tan(a) * (pinion.profile_shift + ring.profile_shift) / dz
-    aw = inverse_involute(inv_w)
-    return 0.5 * m * dz * math.cos(a) / math.cos(aw)
-
-
-def internal_pair_checks(pinion: SpurGear, ring: SpurGear, centre_distance_mm: float | None = None, *,
-                         min_contact_ratio: float = 1.2, min_tip_thickness: float = 0.2,
-                         min_root_clearance: float = 0.1, min_backlash_mm: float = 0.0) -> InternalPairChecks:
-    """Mesh geometry and interference checks of an external pinion inside an internal ring.
-
-    Parameters
-    ----------
-    pinion, ring : SpurGear
-        External and internal gear of the same module and pressure angle, z2 > z1.
-    centre_distance_mm : float, optional
-        Working centre distance a (mm); default :func:`standard_centre_distance`.
-    min_contact_ratio : float
-        Smallest accepted transverse contact ratio (default 1.2, the usual design floor).
-    min_tip_thickness : float
-        Smallest accepted tip thickness of either gear, in modules (default 0.2 m).
-    min_root_clearance : float
-        Smallest accepted radial tip-to-root clearance, in modules (default 0.1 m).
-    min_backlash_mm : float
-        Smallest accepted normal backlash (mm); default 0: flanks must not touch.
-
-    Checks (names of ``items``)
-    ---------------------------
-    ``backlash``
-        Normal backlash at a (mm) >= ``min_backlash_mm`` and > 0. Computed from the tooth
-        thicknesses on the working pitch circles: j_t = e_w2 - s_w1, j_n = j_t cos a_w.
-    ``contact_ratio``
-        eps = [sqrt(r_a1^2 - r_b1^2) - sqrt(r_a2^2 - r_b2^2) + a sin a_w] / p_b.
-    ``pinion_undercut``
-        x1 >= x_min = h_FfP* - z1 sin^2 a / 2 (rack generation, ISO 53 A: h_FfP* = 1).
-    ``involute_interference``
-        The ring tip circle must cut the line of action on the ring side of the pinion's base
-        tangent point T1: T1A = sqrt(r_a2^2 - r_b2^2) - a sin a_w >= 0; equivalent to
-        z1/z2 >= 1 - tan a_a2 / tan a_w (SDP-SI / KHK, "Elements of Metric Gear Technology"
-        eq. 5-5).
-    ``pinion_fillet_contact``
-        The contact starts on the generated involute of the pinion: r_A1 >= r_Ff1, with
-        r_A1 = sqrt(r_b1^2 + T1A^2) (DIN 3960 / ISO 21771 d_Nf >= d_Ff).
-    ``ring_fillet_contact``
-        The contact ends inside the ring's involute: r_E2 <= r_Ff2, r_E2 = sqrt(r_b2^2 +
-        (sqrt(r_a1^2 - r_b1^2) + a sin a_w)^2).
-    ``trochoid_interference``
-        theta1 z1/z2 + inv a_w - inv a_a2 >= theta2, theta1 = acos((r_a2^2 - r_a1^2 - a^2) /
-        (2 a r_a1)) + inv a_a1 - inv a_w, theta2 = acos((a^2 + r_a2^2 - r_a1^2) / (2 a r_a2))
-        (SDP-SI / KHK eqs. 5-6, 5-7): the pinion tip must not cut the ring tip on leaving mesh.
-    ``trimming_interference``
-        theta1 + inv a_a1 - inv a_w >= (z2/z1) (theta2 + inv a_a2 - inv a_w) with
-        theta1 = asin(sqrt((1 - (cos a_a1 / cos a_a2)^2) / (1 - (z1/z2)^2))), theta2 =
-        asin(sqrt(((cos a_a2 / cos a_a1)^2 - 1) / ((z2/z1)^2 - 1))) (eqs. 5-9, 5-10): the
-        pinion can be pulled out radially (else it must be assembled axially).
-    ``root_clearance_pinion_tip`` / ``root_clearance_ring_tip``
-        r_f2 - (a + r_a1) and (r_a2 - a) - r_f1 >= ``min_root_clearance`` m.
-    ``tip_thickness_pinion`` / ``tip_thickness_ring``
-        s_a >= ``min_tip_thickness`` m.
-
-    The value of each item is the margin-carrying number named in its rule; margins are
-    reported even when a formula's premise fails (then the item fails with value nan).
-    """
-    _pair_compatible(pinion, ring)
-    a_std = standard_centre_distance(pinion, ring)
-    a = a_std if centre_distance_mm is None else positive("centre_distance_mm", centre_distance_mm)
-    m = pinion.module_mm
-    z1, z2 = pinion.teeth, ring.teeth
-    rb1, rb2 = pinion.base_radius_mm, ring.base_radius_mm
-    ra1, ra2 = pinion.tip_radius_mm, ring.tip_radius_mm
-    rf1, rf2 = pinion.root_radius_mm, ring.root_radius_mm
-    cw = (rb2 - rb1) / a
-    if not 0.0 < cw < 1.0:
-        raise DesignError("centre_distance_mm", a,
-                          f"must exceed r_b2 - r_b1 = {rb2 - rb1:.6g} mm (no working pressure angle)")
-    aw = math.acos(cw)
-    rw1, rw2 = a * z1 / (z2 - z1), a * z2 / (z2 - z1)
-    inv_aw = involute(aw)
-    items: list[CheckResult] = []
-
-    def add(name: str, value: float, limit: float, ok: bool, unit: str, rule: str) -> None:
-        items.append(CheckResult(name, bool(ok) and math.isfinite(value), float(value), float(limit), unit, rule))
-
-    # backlash on the working pitch circles (both roll without slip there)
-    s_w1 = 2.0 * rw1 * float(pinion.involute_polar(rw1))
-    e_w2 = 2.0 * rw2 * (math.pi / z2 - float(ring.involute_polar(max(rw2, rb2))))
-    j_t = e_w2 - s_w1
-    j_n = j_t * cw
-    add("backlash", j_n, min_backlash_mm, j_n > max(min_backlash_mm, 0.0), "mm",
-        "normal backlash j_n = (e_w2 - s_w1) cos a_w must be > 0 and >= the stated minimum")
-
-    g1 = math.sqrt(ra1 * ra1 - rb1 * rb1)
-    g2 = math.sqrt(ra2 * ra2 - rb2 * rb2)
-    eps = (g1 - g2 + a * math.sin(aw)) / pinion.base_pitch_mm
-    add("contact_ratio", eps, min_contact_ratio, eps >= min_contact_ratio, "",
-        "transverse contact ratio [sqrt(ra1^2-rb1^2) - sqrt(ra2^2-rb2^2) + a sin a_w] / p_b")
-
-    xmin = pinion.undercut_limit_shift
-    add("pinion_undercut", pinion.profile_shift, xmin, not pinion.undercut, "",
-        "pinion profile shift x1 >= h_FfP* - z1 sin^2(a)/2 (no undercut by the generating rack)")
-
-    t1a = g2 - a * math.sin(aw)
-    add("involute_interference", t1a, 0.0, t1a >= 0.0, "mm",
-        "ring tip must meet the line of action between T1 and T2: sqrt(ra2^2 - rb2^2) - a sin a_w >= 0")
-    rA1 = math.hypot(rb1, max(t1a, 0.0))
-    rFf1 = pinion.form_radius_mm
-    add("pinion_fillet_contact", rA1 - rFf1, 0.0, t1a >= 0.0 and rA1 >= rFf1 - 1e-12, "mm",
-        "contact must start on the pinion involute: start-of-active-profile radius r_A1 >= form radius r_Ff1")
-    rE2 = math.hypot(rb2, g1 + a * math.sin(aw))
-    rFf2 = ring.form_radius_mm
-    add("ring_fillet_contact", rFf2 - rE2, 0.0, rE2 <= rFf2 + 1e-12, "mm",
-        "contact must end on the ring involute: end-of-active-profile radius r_E2 <= form radius r_Ff2")
-
-    aa1, aa2 = math.acos(rb1 / ra1), math.acos(rb2 / ra2)
-    c1 = (ra2 * ra2 - ra1 * ra1 - a * a) / (2.0 * a * ra1)
-    c2 = (a * a + ra2 * ra2 - ra1 * ra1) / (2.0 * a * ra2)
-    if abs(c1) <= 1.0 and abs(c2) <= 1.0:
-        th1 = math.acos(c1) + involute(aa1) - inv_aw
-        th2 = math.acos(c2)
-        troch = th1 * z1 / z2 + inv_aw - involute(aa2) - th2
-    else:
-        troch = math.nan
-    add("trochoid_interference", troch, 0.0, troch >= 0.0, "rad",
-        "pinion tip must clear the ring tip on leaving mesh: th1 z1/z2 + inv a_w - inv a_a2 - th2 >= 0")
-
-    q1 = (1.0 - (math.cos(aa1) / math.cos(aa2)) ** 2) / (1.0 - (z1 / z2) ** 2)
-    q2 = ((math.cos(aa2) / math.cos(aa1)) ** 2 - 1.0) / ((z2 / z1) ** 2 - 1.0)
-    if 0.0 <= q1 <= 1.0 and 0.0 <= q2 <= 1.0:
-        th1 = math.asin(math.sqrt(q1))
-        th2 = math.asin(math.sqrt(q2))
-        trim = th1 + involute(aa1) - inv_aw - (z2 / z1) * (th2 + involute(aa2) - inv_aw)
-    else:
-        trim = math.nan
-    add("trimming_interference", trim, 0.0, trim >= 0.0, "rad",
-        "pinion must come out radially: th1 + inv a_a1 - inv a_w - (z2/z1)(th2 + inv a_a2 - inv a_w) >= 0")
-
-    cl1 = rf2 - (a + ra1)
-    cl2 = (ra2 - a) - rf1
-    add("root_clearance_pinion_tip", cl1, min_root_clearance * m, cl1 >= min_root_clearance * m, "mm",
-        "pinion tip to ring root: r_f2 - (a + r_a1) >= min clearance")
-    add("root_clearance_ring_tip", cl2, min_root_clearance * m, cl2 >= min_root_clearance * m, "mm",
-        "ring tip to pinion root: (r_a2 - a) - r_f1 >= min clearance")
-    add("tip_thickness_pinion", pinion.tip_thickness_mm, min_tip_thickness * m,
-        pinion.tip_thickness_mm >= min_tip_thickness * m, "mm", "pinion tip thickness s_a1 >= min")
-    add("tip_thickness_ring", ring.tip_thickness_mm, min_tip_thickness * m,
-        ring.tip_thickness_mm >= min_tip_thickness * m, "mm", "ring tip thickness s_a2 >= min")
-
-    return InternalPairChecks(
-        centre_distance_mm=a, working_pressure_angle_deg=math.degrees(aw),
-        working_pitch_radii_mm=(rw1, rw2), contact_ratio=eps,
-        backlash_circumferential_mm=j_t, backlash_normal_mm=j_n,
-        start_active_radius_pinion_mm=rA1, end_active_radius_ring_mm=rE2, items=tuple(items))
-
-
-# --------------------------------------------------------------------------- the pair and its sizing
-@dataclass(frozen=True)
-class GearPair:
-    """A roller gear (pinion) meshing inside a nut ring gear at ``centre_distance_mm``.
-
-    ``rule`` records how the pair was chosen (empty when built by hand).
-    """
-
-    pinion: SpurGear
-    ring: SpurGear
-    centre_distance_mm: float
-    rule: str = field(default="", compare=False)
-
-    def __post_init__(self) -> None:
-        _pair_compatible(self.pinion, self.ring)
-        object.__setattr__(self, "centre_distance_mm", positive("centre_distance_mm", self.centre_distance_mm))
-
-    @property
-    def ratio(self) -> float:
-        """z_ring / z_pinion (= r_n / r_r, the nut-to-roller ratio n_n)."""
-        return self.ring.teeth / self.pinion.teeth
-
-    def checks(self, **limits: float) -> InternalPairChecks:
-        """:func:`internal_pair_checks` at this pair's centre distance."""
-        return internal_pair_checks(self.pinion, self.ring, self.centre_distance_mm, **limits)
-
-
-def default_gear_pair(roller_pitch_diameter_mm: float, nut_to_roller_ratio: float, *,
-                      pressure_angle_deg: float = 20.0, backlash_mm: float = DEFAULT_TOTAL_BACKLASH_MM,
-                      face_width_mm: float = DEFAULT_FACE_WIDTH_MM,
-                      max_pinion_tip_diameter_mm: float | None = None,
-                      modules: Sequence[float] = ISO54_MODULES_MM) -> GearPair:
-    """Size the roller gear and nut ring gear of a roller screw.
-
-    Rule
-    ----
-    The gear's working pitch diameter must equal the roller's thread pitch diameter d_r and
-    the ratio must equal n_n = r_n / r_r, so with x_ring = -x_pinion (standard centre distance
-    and pressure angle kept): m z_g = d_r and z_ring = n_n z_g, both whole numbers; the centre
-    distance is a = m (z_ring - z_g)/2 = r_n - r_r.
-
-    1. Take the modules of ``modules`` (``ISO54_MODULES_MM``) from the **largest**
-       down; keep those for which z_g = d_r / m and z_ring = n_n z_g are integers.
-    2. First pass, no profile shift: the first module whose pinion is undercut-free at x = 0
-       (z_g >= 2 h_FfP*/sin^2 a, 18 teeth at 20 deg) and whose pair passes every
-       :func:`internal_pair_checks` check wins.
-    3. Else a second pass in the same order with x_pinion = x_min rounded up to 0.01 (no
-       undercut) and x_ring = -x_pinion.
-    4. Ring addendum: 1.0 m, shortened in steps of 0.05 m (down to 0.6 m,
-       ``RING_ADDENDUM_STEPS``) until every check passes. Internal gears need it: with a full
-       addendum the ring tip reaches down the line of action almost to the pinion's base
-       tangent point and touches the pinion below its form circle (fillet contact).
-    5. Backlash: ``backlash_mm`` total circumferential, half as thinning on each gear.
-    6. ``max_pinion_tip_diameter_mm`` (e.g. the roller's thread major diameter when the teeth
-       are cut through the threaded ends): the pinion addendum is shortened to fit, and the
-       checks (contact ratio) decide.
-
-    Raises
-    ------
-    DesignError
-        When no module of the series satisfies the rule.
-    """
-    d_r = positive("roller_pitch_diameter_mm", roller_pitch_diameter_mm)
-    n_n = positive("nut_to_roller_ratio", nut_to_roller_ratio)
-    if n_n <= 1.0:
-        raise DesignError("nut_to_roller_ratio", nut_to_roller_ratio, "must exceed 1 (ring larger than roller)")
-    j = real("backlash_mm", backlash_mm)
-    if j < 0:
-        raise DesignError("backlash_mm", backlash_mm, "must be >= 0")
-    tried: list[str] = []
-    cands = []
-    for m in sorted((float(v) for v in modules), reverse=True):
-        zg, zr = d_r / m, n_n * d_r / m
-        if abs(zg - round(zg)) > 1e-9 * zg or abs(zr - round(zr)) > 1e-9 * zr or round(zg) < 4:
-            continue
-        cands.append((m, int(round(zg)), int(round(zr))))
-    if not cands:
-        raise DesignError("roller_pitch_diameter_mm", roller_pitch_diameter_mm,
-                          f"no module of {tuple(modules)} divides it into whole tooth numbers "
-                          f"(with ratio {n_n:g})")
-    for shifted in (False, True):
-        for m, zg, zr in cands:
-            probe = SpurGear(m, zg, pressure_angle_deg)
-            x = 0.0
-            if probe.undercut_limit_shift > 0.0:
-                if not shifted:
-                    tried.append(f"m={m:g}: z_g={zg} undercut at x=0")
-                    continue
-                x = math.ceil(probe.undercut_limit_shift * 100.0 - 1e-9) / 100.0
-            elif shifted:
-                continue
-            ha1 = 1.0
-            if max_pinion_tip_diameter_mm is not None:
-                ha1 = min(1.0, (0.5 * max_pinion_tip_diameter_mm - 0.5 * m * zg) / m - x)
-                if ha1 <= 0.0:
-                    tried.append(f"m={m:g}: no addendum left under the tip limit")
-                    continue
-            a = 0.5 * m * (zr - zg)
-            failed: tuple[str, ...] = ()
-            for ha2 in RING_ADDENDUM_STEPS:
-                try:
-                    pin = SpurGear(m, zg, pressure_angle_deg, x, False, ha1, 1.25, 0.5 * j, face_width_mm)
-                    ring = SpurGear(m, zr, pressure_angle_deg, -x, True, ha2, 1.25, 0.5 * j, face_width_mm)
-                except DesignError as exc:
-                    failed = (str(exc),)
-                    break
-                res = internal_pair_checks(pin, ring, a)
-                if res.passed:
-                    rule = (f"largest module of the series with z_g = d_r/m and z_ring = n_n z_g whole "
-                            f"{'(profile shift against undercut)' if shifted else 'and no undercut at x = 0'}"
-                            f" whose pair passes all checks with the longest ring addendum: m = {m:g} mm, "
-                            f"z_g = {zg}, z_ring = {zr}, x = {x:+.2f}/{-x:+.2f}, h_a* = {ha1:.3g}/{ha2:.2f}, "
-                            f"total backlash {j:g} mm")
-                    return GearPair(pin, ring, a, rule=rule)
-                failed = res.failed
-            tried.append(f"m={m:g} (x={x:+.2f}): fails {', '.join(failed)}")
-    raise DesignError("roller_pitch_diameter_mm", roller_pitch_diameter_mm,
-                      "no standard module gives a valid roller/ring gear pair: " + "; ".join(tried))
-
-
-# --------------------------------------------------------------------------- phasing
-def mesh_phase(pinion: SpurGear, ring: SpurGear, carrier_angle_rad: ArrayLike) -> NDArray[np.float64] | float:
-    """Spin of the pinion (rad) that centres its teeth in the ring's tooth spaces.
-
-    Frame: ring frame with ring tooth 0 centred on +x; the pinion centre is at distance a on
-    the ray at ``carrier_angle_rad`` psi; the pinion is placed by R_z(psi) Tr(a) R_z(chi), so
-    chi is measured from the line of centres (pinion tooth 0 on the line, pointing away from
-    the ring centre, at chi = 0). With this chi the mesh is mirror-symmetric about the line
-    through the pinion tooth and the ring space it sits in, so the backlash is shared equally
-    by both flank sides.
-
-    chi = pi / z1 - psi z2 / z1, reduced to [0, 2 pi / z1).
-
-    Derivation: at psi = pi / z2 a ring space is centred on the line of centres, and so is a
-    pinion tooth at chi = 0 (mirror symmetry). Conjugate involutes keep the rolling relation
-    of the working pitch circles exactly, r_w1 d(chi) = -r_w2 d(psi) relative to the line of
-    centres, with r_w2 / r_w1 = z2 / z1 at any centre distance.
-    """
-    _pair_compatible(pinion, ring)
-    z1, z2 = pinion.teeth, ring.teeth
-    psi = np.asarray(carrier_angle_rad, dtype=float)
-    out = np.mod(math.pi / z1 - psi * (z2 / z1), _TWO_PI / z1)
-    return float(out) if out.ndim == 0 else out
-
-
-@dataclass(frozen=True)
-class RollerGearPhasing:
-    """Whether identical rollers (one gear offset relative to the thread) all mesh.
-
-    Attributes
-    ----------
-    consistent : bool
-        True when mesh_phase(psi_k) - chi_k is the same modulo 2 pi / z_g for every roller.
-    offset_rad : float
-        The angle of gear tooth 0 in the roller part frame (rad, in [0, 2 pi / z_g)): the gear
-        is cut with its tooth 0 at this angle from the roller's reference direction theta = 0.
-        Taken from roller 0 when not consistent.
-    residuals_rad : ndarray
-        Per roller, (mesh_phase - chi_k - offset) wrapped to [-pi/z_g, pi/z_g): how far each
-        roller's gear would be turned out of the symmetric position.
-    """
-
-    consistent: bool
-    offset_rad: float
-    residuals_rad: NDArray[np.float64]
-
-
-def roller_gear_phasing(pinion: SpurGear, ring: SpurGear, carrier_angles_rad: ArrayLike,
-                        roller_spins_rad: ArrayLike, *, tol_rad: float = 1e-9) -> RollerGearPhasing:
-    """Check that one gear offset on the (identical) rollers meshes every roller.
-
-    Parameters
-    ----------
-    carrier_angles_rad : array (z,)
-        psi_k of the rollers (rad), e.g. ``prs_geom.geometry.frames.carrier_angles``.
-    roller_spins_rad : array (z,)
-        chi_k, the spins the thread imposes (rad), chi_k = -n_s psi_k
-        (``frames.roller_spin``).
-
-    Notes
-    -----
-    With psi_k = 2 pi k / z and chi_k = -n_s psi_k the residual of roller k is
-    -(2 pi k / z)(z2 - n_s z1)/z1 mod 2 pi / z1: zero for all k exactly when z divides
-    (z_ring - n_s z_g) (:func:`phasing_divisible`).
-    """
-    psi = np.atleast_1d(np.asarray(carrier_angles_rad, dtype=float))
-    chi = np.atleast_1d(np.asarray(roller_spins_rad, dtype=float))
-    if psi.shape != chi.shape:
-        raise ValueError("carrier_angles_rad and roller_spins_rad must have the same shape")
-    period = _TWO_PI / pinion.teeth
-    raw = np.asarray(mesh_phase(pinion, ring, psi)) - chi
-    offset = float(np.mod(raw[0], period))
-    res = np.mod(raw - offset + 0.5 * period, period) - 0.5 * period
-    return RollerGearPhasing(bool(np.all(np.abs(res) <= tol_rad)), offset, _frozen(res))
-
-
-def phasing_divisible(roller_count: int, ring_teeth: int, pinion_teeth: int, screw_starts: int) -> bool:
-    """The assembly rule: identical rollers all mesh with one ring gear iff
-    z (roller count) divides z_ring - n_s z_g (for psi_k = 2 pi k / z, chi_k = -n_s psi_k)."""
-    return (ring_teeth - screw_starts * pinion_teeth) % roller_count == 0
-
-
-# --------------------------------------------------------------------------- 2D clearance
-@dataclass(frozen=True)
-class Clearance2D:
-    """Result of :func:`min_clearance_2d`.
-
-    distance_mm : minimum distance between the two boundaries (0 when they cross or touch).
-    overlap : True when the materials intersect (boundaries cross, or one boundary lies
-        inside the other's material).
-    point_a, point_b : closest points (transformed frame) on boundary a and b.
-    """
-
-    distance_mm: float
-    overlap: bool
-    point_a: tuple[float, float]
-    point_b: tuple[float, float]
-
-
-def _seg_seg(p0: NDArray, p1: NDArray, q0: NDArray, q1: NDArray) -> tuple[NDArray, NDArray, NDArray]:
-    """Distance between segments p0-p1 and q0-q1 (broadcast (..., 2)), with closest points."""
-    def cross(a: NDArray, b: NDArray) -> NDArray:
-        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-    d1, d2 = p1 - p0, q1 - q0
-    o1 = cross(d1, q0 - p0)
-    o2 = cross(d1, q1 - p0)
-    o3 = cross(d2, p0 - q0)
-    o4 = cross(d2, p1 - q0)
-    crossing = (o1 * o2 < 0) & (o3 * o4 < 0)
-    best = np.full(np.broadcast_shapes(o1.shape, o3.shape), np.inf)
-    pa = np.zeros(best.shape + (2,))
-    pb = np.zeros(best.shape + (2,))
-    # four point-to-segment candidates
-    for pt, a, b, pt_is_p in ((p0, q0, q1, True), (p1, q0, q1, True), (q0, p0, p1, False), (q1, p0, p1, False)):
-        ab = b - a
-        L2 = np.einsum("...i,...i->...", ab, ab)
-        t = np.clip(np.einsum("...i,...i->...", pt - a, ab) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
-        foot = a + t[..., None] * ab
-        dv = pt - foot
-        d = np.sqrt(np.einsum("...i,...i->...", dv, dv))
-        better = d < best
-        best = np.where(better, d, best)
-        ptb = np.broadcast_to(pt, pa.shape)
-        if pt_is_p:
-            pa = np.where(better[..., None], ptb, pa)
-            pb = np.where(better[..., None], foot, pb)
-        else:
-            pa = np.where(better[..., None], foot, pa)
-            pb = np.where(better[..., None], ptb, pb)
-    best = np.where(crossing, 0.0, best)
-    if np.any(crossing):
-        t = o1 / np.where(o1 - o2 == 0, 1.0, o1 - o2)
-        x = q0 + t[..., None] * d2
-        pa = np.where(crossing[..., None], x, pa)
-        pb = np.where(crossing[..., None], x, pb)
-    return best, pa, pb
-
-
-def point_in_polygon(points: ArrayLike, polygon: ArrayLike) -> NDArray[np.bool_]:
-    """Even-odd rule: which of ``points`` (n, 2) lie inside the closed ``polygon`` (N, 2)."""
-    p = np.atleast_2d(np.asarray(points, dtype=float))
-    v = np.asarray(polygon, dtype=float)
-    w = np.roll(v, -1, axis=0)
-    y0, y1 = v[None, :, 1], w[None, :, 1]
-    py = p[:, None, 1]
-    straddle = (y0 > py) != (y1 > py)
-    xi = v[None, :, 0] + (py - y0) * (w[None, :, 0] - v[None, :, 0]) / np.where(y1 == y0, 1.0, y1 - y0)
-    hits = straddle & (p[:, None, 0] < xi)
-    return (np.count_nonzero(hits, axis=1) % 2) == 1
-
-
-_GROUP = 16
-
-
-def _groups(P: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
-    """Segments of a closed polygon: start, end, midpoint, half length (n, ...), and groups of
-    _GROUP consecutive segments: index (G, _GROUP) and bounding circle centre (G, 2), radius
-    (G,). The last group repeats its last segment as padding (a duplicate never changes a
-    minimum)."""
-    n = len(P)
-    P0, P1 = P, np.roll(P, -1, axis=0)
-    mid = 0.5 * (P0 + P1)
-    half = 0.5 * np.hypot(*(P1 - P0).T)
-    G = -(-n // _GROUP)
-    idx = np.minimum(np.arange(G * _GROUP), n - 1).reshape(G, _GROUP)
-    pts = np.concatenate([P0[idx], P1[idx]], axis=1)
-    c = 0.5 * (pts.min(axis=1) + pts.max(axis=1))
-    R = np.sqrt(((pts - c[:, None, :]) ** 2).sum(-1)).max(axis=1)
-    return P0, P1, mid, half, idx, np.concatenate([c, R[:, None]], axis=1)
-
-
-def min_clearance_2d(outline_a: ArrayLike, transform_a: ArrayLike, outline_b: ArrayLike,
-                     transform_b: ArrayLike, *, a_material_inside: bool = True,
-                     b_material_inside: bool = True) -> Clearance2D:
-    """Exact minimum distance between two closed polygons and whether their materials overlap.
-
-    Parameters
-    ----------
-    outline_a, outline_b : (N, 2) arrays
-        Closed polygons (not repeated at the end), e.g. :meth:`SpurGear.outline`.
-    transform_a, transform_b : (3, 3) arrays
-        Homogeneous 2D transforms applied to each outline (:func:`transform_2d`).
-    a_material_inside, b_material_inside : bool
-        Which side of each polygon is material: True for a gear (inside), False for a ring
-        gear outline (material outside the bore polygon).
-
-    Notes
-    -----
-    Method (all numpy, exact): segments in groups of 16 with bounding circles. An upper bound
-    d_ub (a vertex-to-vertex distance of the most promising group pair, then the distance
-    between two segment midpoints, both points of the boundaries) prunes every group pair and
-    then every segment pair whose bounding circles are farther apart than d_ub; the survivors
-    get the exact segment-segment distance (0 for crossing segments). Overlap: a boundary
-    crossing, or a vertex of one polygon inside the other's material (even-odd
-    point-in-polygon), which catches a whole boundary buried in material.
-    """
-    A = _apply(np.asarray(transform_a, dtype=float), np.asarray(outline_a, dtype=float))
-    B = _apply(np.asarray(transform_b, dtype=float), np.asarray(outline_b, dtype=float))
-    a0, a1, am, ah, ai, ac = _groups(A)
-    b0, b1, bm, bh, bi, bc = _groups(B)
-    dc = np.sqrt(((ac[:, None, :2] - bc[None, :, :2]) ** 2).sum(-1))
-    lb = dc - ac[:, None, 2] - bc[None, :, 2]
-    i, j = np.unravel_index(np.argmin(lb), lb.shape)
-    d_ub = float(np.sqrt(((a0[ai[i]][:, None] - b0[bi[j]][None, :]) ** 2).sum(-1)).min())
-    gi, gj = np.nonzero(lb <= d_ub)
-    # segment pairs of the surviving group pairs, pruned by their own bounding circles
-    sa = ai[gi][:, :, None]                                   # (n, G, 1)
-    sb = bi[gj][:, None, :]                                   # (n, 1, G)
-    dm = np.sqrt(((am[sa] - bm[sb]) ** 2).sum(-1))            # (n, G, G)
-    d_ub = min(d_ub, float(dm.min()))                         # midpoints lie on the boundaries
-    keep = dm - ah[sa] - bh[sb] <= d_ub
-    SA = np.broadcast_to(sa, keep.shape)[keep]
-    SB = np.broadcast_to(sb, keep.shape)[keep]
-    d, xa, xb = _seg_seg(a0[SA], a1[SA], b0[SB], b1[SB])
-    k = int(np.argmin(d))
-    best = float(d[k])
-    overlap = best <= 0.0
-    if not overlap:
-        a_in_b = bool(point_in_polygon(A[:1], B)[0]) == b_material_inside
-        b_in_a = bool(point_in_polygon(B[:1], A)[0]) == a_material_inside
-        overlap = a_in_b or b_in_a
-    return Clearance2D(best, overlap, (float(xa[k, 0]), float(xa[k, 1])), (float(xb[k, 0]), float(xb[k, 1])))
-
-
-@dataclass(frozen=True)
-class SweepClearance:
-    """Clearance of every roller gear against the ring over a carrier sweep.
-
-    clearance_mm : (n_rollers, n_steps) minimum boundary distance; overlap : same shape, bool.
-    """
-
-    advance_rad: NDArray[np.float64]
-    clearance_mm: NDArray[np.float64]
-    overlap: NDArray[np.bool_]
-
-    @property
-    def min_clearance_mm(self) -> float:
-        return float(self.clearance_mm.min())
-
-    @property
-    def any_overlap(self) -> bool:
-        return bool(self.overlap.any())
-
-
-def pinion_transform(carrier_angle_rad: float, centre_distance_mm: float, spin_rad: float) -> NDArray[np.float64]:
-    """R_z(psi) Tr(a) R_z(chi) as a 3x3 2D transform (pinion frame -> ring frame)."""
-    return (transform_2d(carrier_angle_rad) @ transform_2d(0.0, centre_distance_mm)
-            @ transform_2d(spin_rad))
-
-
-def sweep_clearance(pair: GearPair, carrier_angles_rad: ArrayLike, roller_spins_rad: ArrayLike,
-                    offset_rad: float, advance_rad: ArrayLike, *, chord_tol_mm: float = 1e-3) -> SweepClearance:
-    """Run the mechanism and measure every roller gear's clearance to the ring gear.
-
-    Roller k at carrier advance t: centre on the ray psi_k + t at the pair's centre distance,
-    gear spin (from the line of centres) chi_k + offset - (z_ring / z_g) t: the rolling
-    relation of the gears (and of the threads, n_n = z_ring / z_g). The ring is fixed in its
-    own frame (tooth 0 on +x).
-    """
-    psi = np.atleast_1d(np.asarray(carrier_angles_rad, dtype=float))
-    chi = np.atleast_1d(np.asarray(roller_spins_rad, dtype=float))
-    adv = np.atleast_1d(np.asarray(advance_rad, dtype=float))
-    P = pair.pinion.outline(chord_tol_mm)
-    Rg = pair.ring.outline(chord_tol_mm)
-    I3 = np.eye(3)
-    ratio = pair.ring.teeth / pair.pinion.teeth
-    cl = np.empty((len(psi), len(adv)))
-    ov = np.empty((len(psi), len(adv)), dtype=bool)
-    for k in range(len(psi)):
-        for s, t in enumerate(adv):
-            T = pinion_transform(psi[k] + t, pair.centre_distance_mm, chi[k] + offset_rad - ratio * t)
-            r = min_clearance_2d(P, T, Rg, I3, b_material_inside=False)
-            cl[k, s], ov[k, s] = r.distance_mm, r.overlap
-    return SweepClearance(_frozen(adv), _frozen(cl), _frozen(ov))
-
-
-# --------------------------------------------------------------------------- from a design
-def design_gear_pair(design) -> GearPair | None:
-    """The roller/ring gear pair of a :class:`~prs_geom.model.design.PRSDesign` (None when
-    ``design.gears.enabled`` is false).
-
-    :func:`default_gear_pair` with the design's pressure angle, backlash and face width
-    (default two thread pitches); the module series is the design's ``gears.module_mm``
-    alone when given, else ISO 54. The roller gear's tip is capped at the roller's thread
-    major diameter: the teeth are cut through the threaded roller ends, so nothing of the
-    gear stands above the thread. n_n = d_n / d_r.
-    """
-    g = design.gears
-    if not g.enabled:
-        return None
-    width = g.face_width_mm if g.face_width_mm is not None else 2.0 * design.thread.pitch_mm
-    modules = (g.module_mm,) if g.module_mm is not None else ISO54_MODULES_MM
-    try:
-        return default_gear_pair(design.roller.pitch_diameter_mm,
-                                 design.nut.pitch_diameter_mm / design.roller.pitch_diameter_mm,
-                                 pressure_angle_deg=g.pressure_angle_deg, backlash_mm=g.backlash_mm,
-                                 face_width_mm=width, max_pinion_tip_diameter_mm=design.roller.major_diameter_mm,
-                                 modules=modules)
-    except DesignError as exc:
-        field = "gears.module_mm" if g.module_mm is not None else "roller.pitch_diameter_mm"
-        raise DesignError(field, g.module_mm if g.module_mm is not None else design.roller.pitch_diameter_mm,
-                          f"no valid roller/ring gear pair: {exc.rule}") from exc
-
-
-def ring_gear_outer_radius(design, pair: GearPair) -> float:
-    """Outside radius (mm) of the modelled ring gear body: halfway from the ring's root
-    circle to the nut body (an outer cylinder flush with the nut's would meet its
-    differently sampled polygon in slivers when the nut's parts are united)."""
-    return 0.5 * (pair.ring.root_radius_mm + 0.5 * design.nut.outer_diameter_mm)
+    return frozen_float64(pts)

@@ -40,6 +40,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import PchipInterpolator
 
+__all__ = ["PitchWarp", "identity_warp"]
+
 
 @dataclass(frozen=True)
 class PitchWarp:

@@ -44,6 +44,9 @@ from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import (SIZE_RANGE_UPPER_MM, Fit, FitLimits, RetainingRing, StandardTableError,
                                       din472_ring, din472_sizes, tolerance_zone)
 
+__all__ = ["ISO286_END_MM", "MIN_CARRIER_WEB_MM", "NUT_END_RELIEF_MM", "RING_GAP_RAD", "Dimension", "EndLayout",
+           "FitCheck", "MechanismLayout", "StackUp", "check_layout", "layout", "layout_warnings"]
+
 #: Opening of the modelled retaining ring (rad): DIN 472 rings are open C shapes; the lugs
 #: and their holes are not modelled (their volume is a few per cent of the ring's).
 RING_GAP_RAD = math.radians(30.0)
@@ -298,7 +301,7 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
     m = design.mechanism
     if not m.enabled:
         return None
-    from prs_geom.geometry.gears import design_gear_pair, ring_gear_outer_radius
+    from prs_geom.geometry.gear_pair import design_gear_pair, ring_gear_outer_radius
 
     pair = design_gear_pair(design)
     L = design.thread.engaged_teeth * design.thread.pitch_mm
@@ -424,7 +427,7 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
 
 def check_layout(design: PRSDesign) -> MechanismLayout | None:
     """Every rule of a build that needs no meshing, for the parts beyond the threads: the end
-    gears' sizing (:func:`~prs_geom.geometry.gears.design_gear_pair`) and, when the design has
+    gears' sizing (:func:`~prs_geom.geometry.gear_pair.design_gear_pair`) and, when the design has
     a mechanism, its :func:`layout` with every standard-table look-up (ISO 286 fits and the
     stack-up zones, the DIN 472 ring). ``prs-geom validate`` and ``build`` run it before any
     work, so that a design they accept does not fail later for a rule it could have checked.
@@ -436,7 +439,7 @@ def check_layout(design: PRSDesign) -> MechanismLayout | None:
     """
     if design.mechanism.enabled:
         return layout(design)
-    from prs_geom.geometry.gears import design_gear_pair
+    from prs_geom.geometry.gear_pair import design_gear_pair
 
     design_gear_pair(design)
     return None

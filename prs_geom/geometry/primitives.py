@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+__all__ = ["CircleArc", "EllipseArc", "Segment"]
+
 
 @dataclass(frozen=True)
 class Segment:

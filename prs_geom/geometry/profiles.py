@@ -36,6 +36,8 @@ from prs_geom.geometry.flanks import ArcFlank, FlankShape, StraightFlank
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.model.design import PRSDesign
 
+__all__ = ["ThreadProfile", "ThreadProfiles"]
+
 
 @dataclass(frozen=True)
 class ThreadProfile:

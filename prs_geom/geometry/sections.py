@@ -22,6 +22,8 @@ from prs_geom.geometry.helix import PitchWarp
 from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile
 
+__all__ = ["axial_section", "normal_section"]
+
 
 def _clip_segment(p0, p1, lo, hi, kind):
     (x0, y0), (x1, y1) = p0, p1

@@ -86,11 +86,12 @@ def end_gears(design: PRSDesign, tol: float, prof: ThreadProfiles | None = None)
     and is the roller thread continued there, intersected with the involute gear prism: the
     teeth are cut through the threaded end, so the gear's tip carries the thread and meshes
     with the screw like the thread does. Its tooth 0 sits at the phasing offset from the
-    roller's theta = 0 (:func:`prs_geom.geometry.gears.roller_gear_phasing`), the same on
+    roller's theta = 0 (:func:`prs_geom.geometry.gear_phasing.roller_gear_phasing`), the same on
     every roller. The ring gears span the same z ranges in the nut frame, tooth 0 on +x, rings
     from their root to halfway to the nut body diameter.
     """
-    from prs_geom.geometry.gears import design_gear_pair, ring_gear_outer_radius, roller_gear_phasing
+    from prs_geom.geometry.gear_pair import design_gear_pair, ring_gear_outer_radius
+    from prs_geom.geometry.gear_phasing import roller_gear_phasing
     from prs_geom.mesh.gears import gear_mesh
 
     pair = design_gear_pair(design)

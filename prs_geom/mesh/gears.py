@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom.geometry.gears import SpurGear
+from prs_geom.geometry.planar import rotation_2d
 from prs_geom.model.errors import DesignError
 
 _TWO_PI = 2.0 * math.pi
@@ -102,8 +103,7 @@ def gear_mesh(gear: SpurGear, z0: float, z1: float, chord_tol_mm: float = 1e-3, 
         raise DesignError("gear", f"z={gear.teeth}, x={gear.profile_shift}",
                           "outline is not star-shaped about the axis (undercut?): the cap "
                           "triangulation needs every ray from the axis to meet it once")
-    c, s = math.cos(phase_rad), math.sin(phase_rad)
-    rot = np.array([[c, -s], [s, c]])
+    rot = rotation_2d(phase_rad)
     if not gear.internal:
         P = outline @ rot.T
         n = len(P)

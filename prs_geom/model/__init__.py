@@ -7,3 +7,5 @@ types (:mod:`~prs_geom.model.errors`) and reading and writing design files in TO
 (:mod:`~prs_geom.model.io`), and standard data: ISO 286 limits and fits, DIN 472 retaining
 rings (:mod:`~prs_geom.model.standards`). The bottom layer: it imports nothing else of prs_geom.
 """
+
+__all__: list[str] = []

@@ -36,6 +36,14 @@ from prs_geom.model.errors import DesignError, DesignWarning
 from prs_geom.model.validation import (bounded, check_name, choice, force, integer, optional_force, optional_length,
                                        optional_size, pitch_list, positive, real, size)
 
+__all__ = ["CARRIER_GUIDANCE", "COMPLIANCE_MODELS", "DEFAULT_ADDENDUM_FACTOR", "DEFAULT_DEDENDUM_FACTOR",
+           "DEFAULT_REQUIRED_STATIC_SAFETY", "DISTRIBUTIONS", "DN_LIMIT_RANGE_MM_RPM", "END_SUPPORTS", "FLANK_FIELDS",
+           "HANDS", "INSTALLATIONS", "LIFE_RANGE_HOURS", "LOAD_FRACTION_RANGE", "MAX_PITCH_DEVIATION",
+           "MAX_TOLERANCE_UM", "RELIABILITY_RANGE", "REQUIRED_STATIC_SAFETY_RANGE", "SIZING_RTOL", "SPEED_RANGE_RPM",
+           "TOOTH_WIDTHS", "ContactSettings", "GearSettings", "LoadSettings", "Loading", "Material", "Materials",
+           "MechanismSettings", "MeshSettings", "Nut", "PRSDesign", "RatingSettings", "Roller", "Screw", "Supports",
+           "Thread", "Tolerances", "default_design"]
+
 #: Installation types of docs/theory/loads.md.
 INSTALLATIONS = ("tension-compression", "compression-compression")
 HANDS = ("right", "left")
@@ -440,7 +448,7 @@ class GearSettings:
     none: the largest ISO 54 module that gives whole tooth numbers and passes every check),
     the pressure angle, the total circumferential backlash (half as tooth thinning on each
     gear) and the face width (none: two thread pitches). Profile shift and the ring
-    addendum follow from the rule of :func:`prs_geom.geometry.gears.default_gear_pair`.
+    addendum follow from the rule of :func:`prs_geom.geometry.gear_pair.default_gear_pair`.
     ``enabled = false`` leaves the gears out of meshes, checks and report.
     """
 
@@ -712,7 +720,7 @@ class PRSDesign:
         add, ded = DEFAULT_ADDENDUM_FACTOR * half_depth, DEFAULT_DEDENDUM_FACTOR * half_depth
         n = self.thread.engaged_teeth
         # the notes name the formula, the fields it reads and their values, so that an error
-        # on a derived dimension says where it came from (issue 28)
+        # on a derived dimension says where it came from
         h_from = (f"H = thread.pitch_mm / (4 tan thread.flank_half_angle_deg) = {half_depth:.6g} mm with "
                   f"thread.pitch_mm = {p!r} and thread.flank_half_angle_deg = "
                   f"{self.thread.flank_half_angle_deg!r}")
@@ -815,8 +823,15 @@ class PRSDesign:
         return out
 
     def _check(self) -> None:
-        p = self.thread.pitch_mm
-        n = self.thread.engaged_teeth
+        """The cross-part rules, in order; the first broken one raises :class:`DesignError`."""
+        self._check_part_diameters()
+        self._check_tooth_widths()
+        self._check_radial_fits()
+        self._check_lengths_and_lists()
+
+    def _check_part_diameters(self) -> None:
+        """Each pitch diameter lies between its part's minor and major diameters, and the roller
+        flank arc (centred on the roller axis) reaches beyond the roller crest."""
         s, r, u = self.screw, self.roller, self.nut
         for part, spec in (("screw", s), ("roller", r), ("nut", u)):
             if not spec.minor_diameter_mm < spec.pitch_diameter_mm < spec.major_diameter_mm:
@@ -830,7 +845,12 @@ class PRSDesign:
                               f"roller.major_diameter_mm / 2 = {0.5 * r.major_diameter_mm} mm (the flank arc "
                               f"is centred on the roller axis): increase roller.arc_radius_mm or reduce "
                               f"roller.major_diameter_mm")
-        # Tooth and groove widths must stay positive over the whole flank height.
+
+    def _check_tooth_widths(self) -> None:
+        """Tooth and groove half-widths (:meth:`normal_half_widths`) stay positive over the whole
+        flank height; the message spells the formula and the fields it read."""
+        p = self.thread.pitch_mm
+        r = self.roller
         beta_txt = f"thread.flank_half_angle_deg = {self.thread.flank_half_angle_deg!r}"
         for part, (crest_w, root_w) in self.normal_half_widths().items():
             spec = getattr(self, part)
@@ -861,6 +881,11 @@ class PRSDesign:
                                   f"the {part} groove closes above the root: {part} groove half-width at the "
                                   f"root = {root_f} = {root_w:.4g} mm with {src}; it must be > 0: make the root "
                                   f"shallower ({fld}) or increase thread.pitch_mm")
+
+    def _check_radial_fits(self) -> None:
+        """At the centre distance a = r_s + r_r no crest reaches the mating root, the nut body is
+        thicker than its thread and neighbouring rollers clear each other."""
+        s, r, u = self.screw, self.roller, self.nut
         a = 0.5 * (s.pitch_diameter_mm + r.pitch_diameter_mm)
         a_txt = (f"centre distance a = (screw.pitch_diameter_mm + roller.pitch_diameter_mm) / 2 = "
                  f"({s.pitch_diameter_mm!r} + {r.pitch_diameter_mm!r}) / 2 = {a} mm")
@@ -897,6 +922,13 @@ class PRSDesign:
                               f"centre spacing 2 a sin(pi / roller.count) = {gap:.4g} mm ({a_txt}) must exceed "
                               f"the roller crest diameter roller.major_diameter_mm = {r.major_diameter_mm} mm: "
                               f"use fewer rollers or a larger screw.pitch_diameter_mm")
+
+    def _check_lengths_and_lists(self) -> None:
+        """The screw covers the engaged length; the target load-distribution coefficient, the
+        flank tolerance lists and the pitch lists fit the number of engaged teeth."""
+        p = self.thread.pitch_mm
+        n = self.thread.engaged_teeth
+        s, r, u = self.screw, self.roller, self.nut
         if s.length_mm < n * p:
             raise self._error("screw.length_mm", s.length_mm,
                               f"must be at least the engaged length n p = {n * p} mm (thread.engaged_teeth "

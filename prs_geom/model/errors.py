@@ -16,6 +16,10 @@ import math
 import numbers
 from typing import Any
 
+__all__ = ["SHOWN_FIELD_CHARS", "SHOWN_PREFIX_CHARS", "SHOWN_TEXT_CHARS", "SHOWN_VALUE_CHARS", "ConvergenceError",
+           "DesignError", "DesignWarning", "EnvironmentFailure", "OutputRefused", "PRSGeomError", "format_value",
+           "key_name", "quote"]
+
 
 def quote(text: str) -> str:
     """A TOML basic string: quotes and backslashes escaped, every non-printable character

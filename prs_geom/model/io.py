@@ -34,6 +34,12 @@ from typing import Any
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, EnvironmentFailure, OutputRefused, key_name, quote
 
+__all__ = ["DESIGN_FORMAT_VERSION", "FIELD_COMMENTS", "MAX_INPUT_BYTES", "MAX_KEY_CHARS", "MAX_NESTING",
+           "MAX_TEXT_CHARS", "PRS_KINDS", "build_section", "check_document", "check_format_version",
+           "check_output_file", "decode_text", "design_from_dict", "design_hash", "design_to_dict", "dumps_json",
+           "dumps_toml", "is_office_lock", "load_design", "load_document", "load_spectrum", "loads_json", "loads_toml",
+           "parse_document", "read_input_text", "read_user_file", "save_design", "toml_string", "write_file_atomic"]
+
 #: Comments written by ``prs-geom init`` above each key (unit and meaning).
 FIELD_COMMENTS: dict[str, str] = {
     "name": "design name; also the default output folder exports/<name>",

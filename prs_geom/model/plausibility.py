@@ -1,4 +1,4 @@
-"""Plausibility warnings of a valid design (issue 28): values the model accepts but that are
+"""Plausibility warnings of a valid design: values the model accepts but that are
 probably a unit slip or a typing error, and rollers that would drift axially.
 
 Errors (:class:`~prs_geom.model.errors.DesignError`) stop a design; these are warnings:
@@ -32,6 +32,9 @@ from typing import Any
 
 from prs_geom.model.design import PRSDesign, RatingSettings
 from prs_geom.model.errors import format_value
+
+__all__ = ["DRIFT_TOLERANCE_MM", "MAX_ROOT_STRESS_MPA", "PLAUSIBLE_RANGES", "Plausible", "design_warnings",
+           "drift_warning", "plausibility_warnings", "roller_drift_per_screw_turn_mm"]
 
 __all__ = ["Plausible", "PLAUSIBLE_RANGES", "MAX_ROOT_STRESS_MPA", "DRIFT_TOLERANCE_MM", "plausibility_warnings",
            "roller_drift_per_screw_turn_mm", "drift_warning", "design_warnings"]

@@ -28,6 +28,8 @@ import numpy as np
 from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import positive, real
 
+__all__ = ["SHARE_SUM_TOL", "LoadCase", "Spectrum", "spectrum_from_dict"]
+
 #: The shares must sum to 1 within this (they are typed with a few digits).
 SHARE_SUM_TOL = 1e-9
 

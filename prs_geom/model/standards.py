@@ -61,6 +61,12 @@ from typing import Any
 
 from prs_geom.model.errors import DesignError
 
+__all__ = ["DELTA_UM", "DIN472_TABLE", "FIT_KINDS", "GRADES", "HOLE_LETTERS", "HOLE_LOWER_DEVIATION_UM",
+           "HOLE_UPPER_BASE_UM", "ISO286_TABLE", "IT_GRADES_UM", "SHAFT_LETTERS", "SHAFT_LOWER_DEVIATION_UM",
+           "SHAFT_UPPER_DEVIATION_UM", "SIZE_RANGES_MM", "SIZE_RANGE_UPPER_MM", "Fit", "FitLimits", "RetainingRing",
+           "StandardTableError", "ToleranceZone", "din472_ring", "din472_sizes", "it_tolerance_um", "size_range_index",
+           "size_range_mm", "tolerance_zone"]
+
 
 class StandardTableError(DesignError):
     """A look-up that leaves a standard table: a size beyond its range, a symbol, grade or

@@ -12,6 +12,10 @@ from typing import Any, Callable
 
 from prs_geom.model.errors import DesignError, format_value
 
+__all__ = ["LOAD_RANGE_N", "MAX_LENGTH_MM", "MAX_SIZE_MM", "MIN_SIZE_MM", "NAME_RE", "bounded", "check_name", "choice",
+           "force", "integer", "length", "optional_force", "optional_length", "optional_positive", "optional_size",
+           "pitch_list", "positive", "real", "size"]
+
 #: Allowed design names (they name output folders).
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 #: Largest accepted size (mm) of a diameter, radius or pitch: a sanity bound, since a
