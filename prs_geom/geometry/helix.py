@@ -67,6 +67,7 @@ class PitchWarp:
 
     @property
     def is_identity(self) -> bool:
+        """True when every tooth-to-tooth pitch equals the constant pitch (no warp)."""
         return self.pitch_list is None or all(pj == self.pitch for pj in self.pitch_list)
 
     @property

@@ -81,10 +81,12 @@ class FitCheck:
 
     @property
     def min_clearance_mm(self) -> float:
+        """Smallest diametral clearance (mm) of the zones: largest shaft in smallest hole."""
         return self.limits.min_clearance_mm
 
     @property
     def max_clearance_mm(self) -> float:
+        """Largest diametral clearance (mm) of the zones: smallest shaft in largest hole."""
         return self.limits.max_clearance_mm
 
     @property
@@ -98,6 +100,7 @@ class FitCheck:
         return self.min_clearance_mm > 0.0
 
     def report(self) -> dict:
+        """The fit as report.json writes it (sizes and clearances in mm)."""
         return {"feature": self.feature, "fit": self.fit,
                 "nominal_diameter_mm": self.nominal_diameter_mm,
                 "hole_limits_mm": [self.limits.hole.min_size_mm, self.limits.hole.max_size_mm],
@@ -126,6 +129,7 @@ class Dimension:
     count: int = 1
 
     def report(self) -> dict:
+        """The dimension as report.json writes it (mm)."""
         return {"name": self.name, "nominal_mm": self.nominal_mm, "lower_deviation_mm": self.lower_mm,
                 "upper_deviation_mm": self.upper_mm, "sense": self.sense, "count": self.count}
 
@@ -144,23 +148,28 @@ class StackUp:
 
     @property
     def nominal_mm(self) -> float:
+        """Axial play (mm) with every dimension at its nominal size."""
         return sum(d.sense * d.count * d.nominal_mm for d in self.dimensions)
 
     @property
     def min_mm(self) -> float:
+        """Worst-case smallest axial play (mm)."""
         return sum(d.sense * d.count * (d.nominal_mm + (d.lower_mm if d.sense > 0 else d.upper_mm))
                    for d in self.dimensions)
 
     @property
     def max_mm(self) -> float:
+        """Worst-case largest axial play (mm)."""
         return sum(d.sense * d.count * (d.nominal_mm + (d.upper_mm if d.sense > 0 else d.lower_mm))
                    for d in self.dimensions)
 
     @property
     def passed(self) -> bool:
+        """True when the play stays positive at the worst case."""
         return self.min_mm > 0.0
 
     def report(self) -> dict:
+        """The stack-up as report.json writes it (mm)."""
         return {"chain": [d.report() for d in self.dimensions], "nominal_play_mm": self.nominal_mm,
                 "min_play_mm": self.min_mm, "max_play_mm": self.max_mm, "passed": self.passed,
                 "rule": "worst case; the play must stay positive at the minimum"}
@@ -214,17 +223,20 @@ class MechanismLayout:
     # closed-form volumes of the true shapes (mm^3) ---------------------------------
     @property
     def journal_volume_mm3(self) -> float:
+        """Volume of one journal (mm^3): a cylinder of the modelled shaft diameter through the carrier."""
         r = 0.5 * self.journal_fit.shaft_diameter_mm
         return math.pi * r * r * self.carrier_thickness_mm
 
     @property
     def carrier_volume_mm3(self) -> float:
+        """Volume of one carrier (mm^3): the annulus less the roller bores."""
         rb = 0.5 * self.journal_fit.hole_diameter_mm
         ring = math.pi * (self.carrier_outer_radius_mm ** 2 - self.carrier_inner_radius_mm ** 2)
         return (ring - self.roller_count * math.pi * rb * rb) * self.carrier_thickness_mm
 
     @property
     def ring_volume_mm3(self) -> float:
+        """Volume of one retaining ring (mm^3): an open annulus (gap RING_GAP_RAD)."""
         return 0.5 * (2.0 * math.pi - RING_GAP_RAD) * (self.ring_outer_radius_mm ** 2
                                                        - self.ring_inner_radius_mm ** 2) * self.ring.thickness_mm
 

@@ -189,17 +189,17 @@ def _candidate_segment_pairs(ga: _SegmentGroups, gb: _SegmentGroups) -> tuple[ND
     boundaries) prunes the group pairs, then the segment pairs, whose bounding circles are
     farther apart than d_ub.
     """
-    ac, bc = ga.circle, gb.circle
-    dc = np.sqrt(((ac[:, None, :2] - bc[None, :, :2]) ** 2).sum(-1))
-    lb = dc - ac[:, None, 2] - bc[None, :, 2]
-    i, j = np.unravel_index(np.argmin(lb), lb.shape)
+    ca, cb = ga.circle, gb.circle
+    centre_gap = np.sqrt(((ca[:, None, :2] - cb[None, :, :2]) ** 2).sum(-1))
+    lower_bound = centre_gap - ca[:, None, 2] - cb[None, :, 2]               # (Ga, Gb)
+    i, j = np.unravel_index(np.argmin(lower_bound), lower_bound.shape)
     d_ub = float(np.sqrt(((ga.start[ga.index[i]][:, None] - gb.start[gb.index[j]][None, :]) ** 2).sum(-1)).min())
-    gi, gj = np.nonzero(lb <= d_ub)
-    sa = ga.index[gi][:, :, None]                             # (n, G, 1)
-    sb = gb.index[gj][:, None, :]                             # (n, 1, G)
-    dm = np.sqrt(((ga.mid[sa] - gb.mid[sb]) ** 2).sum(-1))    # (n, G, G)
-    d_ub = min(d_ub, float(dm.min()))
-    keep = dm - ga.half_length[sa] - gb.half_length[sb] <= d_ub
+    gi, gj = np.nonzero(lower_bound <= d_ub)
+    sa = ga.index[gi][:, :, None]                                           # (n, G, 1)
+    sb = gb.index[gj][:, None, :]                                           # (n, 1, G)
+    mid_gap = np.sqrt(((ga.mid[sa] - gb.mid[sb]) ** 2).sum(-1))             # (n, G, G)
+    d_ub = min(d_ub, float(mid_gap.min()))
+    keep = mid_gap - ga.half_length[sa] - gb.half_length[sb] <= d_ub
     return np.broadcast_to(sa, keep.shape)[keep], np.broadcast_to(sb, keep.shape)[keep]
 
 

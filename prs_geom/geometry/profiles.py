@@ -104,6 +104,7 @@ class ThreadProfile:
 
     @property
     def cos_lead(self) -> float:
+        """cos of :attr:`lead_angle`."""
         return math.cos(self.lead_angle)
 
     @property
@@ -135,9 +136,11 @@ class ThreadProfile:
         return self.flank.radius_at_half_width(np.asarray(t, dtype=np.float64) * c, 0.25 * self.pitch * c)
 
     def tooth_half_width_at_crest(self) -> float:
+        """Axial tooth half-width (mm) at the crest radius."""
         return float(self.tooth_half_width(self.crest_radius))
 
     def groove_half_width_at_root(self) -> float:
+        """Axial groove half-width (mm) at the root radius: p/2 less the tooth half-width there."""
         return 0.5 * self.pitch - float(self.tooth_half_width(self.root_radius))
 
     def corner_offsets(self) -> NDArray[np.float64]:
@@ -173,6 +176,8 @@ class ThreadProfiles:
 
     @classmethod
     def from_design(cls, design: "PRSDesign") -> "ThreadProfiles":
+        """The screw, roller and nut profiles of a resolved design (straight flanks on screw and
+        nut, the arc flank on the roller)."""
         t = design.thread
         s, r, n = design.screw, design.roller, design.nut
         common = dict(pitch=t.pitch_mm, beta=t.beta, hand_sign=t.hand_sign)
@@ -180,18 +185,18 @@ class ThreadProfiles:
         # the one place that chooses the flank shape of each part
         rs, rr, rn = 0.5 * s.pitch_diameter_mm, 0.5 * r.pitch_diameter_mm, 0.5 * n.pitch_diameter_mm
         return cls(
-            screw=ThreadProfile("screw", False, starts=s.starts, pitch_radius=rs,
+            screw=ThreadProfile(part="screw", internal=False, starts=s.starts, pitch_radius=rs,
                                 crest_radius=0.5 * s.major_diameter_mm,
                                 root_radius=0.5 * s.minor_diameter_mm,
-                                flank=StraightFlank(tb, -1, rs), **common),
-            roller=ThreadProfile("roller", False, starts=1, pitch_radius=rr,
+                                flank=StraightFlank(tan_beta=tb, sign=-1, pitch_radius=rs), **common),
+            roller=ThreadProfile(part="roller", internal=False, starts=1, pitch_radius=rr,
                                  crest_radius=0.5 * r.major_diameter_mm,
                                  root_radius=0.5 * r.minor_diameter_mm,
-                                 flank=ArcFlank(r.arc_radius_mm, rr), **common),
-            nut=ThreadProfile("nut", True, starts=n.starts, pitch_radius=rn,
+                                 flank=ArcFlank(arc_radius=r.arc_radius_mm, pitch_radius=rr), **common),
+            nut=ThreadProfile(part="nut", internal=True, starts=n.starts, pitch_radius=rn,
                               crest_radius=0.5 * n.minor_diameter_mm,
                               root_radius=0.5 * n.major_diameter_mm,
-                              flank=StraightFlank(tb, +1, rn), **common),
+                              flank=StraightFlank(tan_beta=tb, sign=+1, pitch_radius=rn), **common),
         )
 
     def __iter__(self):

@@ -74,6 +74,7 @@ class Spectrum:
 
     @property
     def has_speeds(self) -> bool:
+        """True when the cases give speeds (then every case does)."""
         return self.cases[0].speed_rpm is not None
 
     @property
@@ -86,10 +87,12 @@ class Spectrum:
 
     @property
     def weighting(self) -> str:
+        """What the weights share: ``"revolutions"`` with speeds, else ``"time"``."""
         return "revolutions" if self.has_speeds else "time"
 
     @property
     def loads_n(self) -> tuple[float, ...]:
+        """The axial load of each case (N)."""
         return tuple(c.load_n for c in self.cases)
 
     @staticmethod
@@ -104,6 +107,8 @@ class Spectrum:
         return Spectrum(tuple(LoadCase(f * design_load_n, 1.0 / k) for f in fractions))
 
     def as_dict(self) -> dict[str, Any]:
+        """The spectrum as the report writes it: weighting and per case load (N), time share,
+        speed (rpm or None) and weight."""
         return {"weighting": self.weighting,
                 "cases": [{"load_n": c.load_n, "time_share": c.time_share, "speed_rpm": c.speed_rpm,
                            "weight": float(w)} for c, w in zip(self.cases, self.weights)]}
