@@ -55,7 +55,7 @@ class GearPair:
         return self.ring.teeth / self.pinion.teeth
 
     def checks(self, **limits: float) -> InternalPairChecks:
-        """:func:`internal_pair_checks` at this pair's centre distance."""
+        """:func:`~prs_geom.geometry.gear_checks.internal_pair_checks` at this pair's centre distance."""
         return internal_pair_checks(self.pinion, self.ring, self.centre_distance_mm, **limits)
 
 
@@ -77,7 +77,7 @@ def default_gear_pair(roller_pitch_diameter_mm: float, nut_to_roller_ratio: floa
        down; keep those for which z_g = d_r / m and z_ring = n_n z_g are integers.
     2. First pass, no profile shift: the first module whose pinion is undercut-free at x = 0
        (z_g >= 2 h_FfP*/sin^2 a, 18 teeth at 20 deg) and whose pair passes every
-       :func:`internal_pair_checks` check wins.
+       :func:`~prs_geom.geometry.gear_checks.internal_pair_checks` check wins.
     3. Else a second pass in the same order with x_pinion = x_min rounded up to 0.01 (no
        undercut) and x_ring = -x_pinion.
     4. Ring addendum: 1.0 m, shortened in steps of 0.05 m (down to 0.6 m,
