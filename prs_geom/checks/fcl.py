@@ -86,7 +86,7 @@ from numpy.typing import NDArray
 from prs_geom.analysis.contact import (ContactBatch, PartFlanks, euclidean_distance, solve_collinear,
                                        theoretical_screw, tooth_contacts)
 from prs_geom.analysis.loads import gap_terms
-from prs_geom.geometry.frames import roller_transform
+from prs_geom.geometry.frames import roller_transform, rotation_z
 from prs_geom.geometry.profiles import ThreadProfile
 from prs_geom.model.design import PRSDesign
 
@@ -247,14 +247,6 @@ def bvh_model(V: NDArray, F: NDArray) -> fcl.BVHModel:
     g.addSubModel(np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int32))
     g.endModel()
     return g
-
-
-def _rot_z(a: NDArray) -> NDArray:
-    """Rotations about +z by the angles ``a`` (rad), shape (N, 3, 3)."""
-    c, s = np.cos(a), np.sin(a)
-    R = np.zeros((len(a), 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
-    return R
 
 
 @dataclass(frozen=True)
@@ -457,11 +449,11 @@ def verify_side(design: PRSDesign, side: str, tol: float, screw_profile: ThreadP
     # patch placements, part frame -> screw frame: rotate the reference nearest point's angle
     # onto the contact's and shift by the helix between them; the roller patch then goes where
     # the assembly puts roller k, plus the settling shift and the perturbation
-    RA = _rot_z(tha - tha[ref_a])
+    RA = np.ascontiguousarray(rotation_z(tha - tha[ref_a])[:, :3, :3])
     tA = np.zeros((settled.n, 3))
     tA[:, 2] = hA - hA[ref_a]
     Tk = np.stack([roller_transform(design, k) for k in range(z)])[info["roller"]]
-    RB = Tk[:, :3, :3] @ _rot_z(phb - phb[ref_b])
+    RB = Tk[:, :3, :3] @ np.ascontiguousarray(rotation_z(phb - phb[ref_b])[:, :3, :3])
     tB = Tk[:, :3, 3].copy()
     tB[:, 2] += hB - hB[ref_b] + settled.z_offset + perturb[info["roller"]]
 
