@@ -91,6 +91,14 @@ from prs_geom.geometry.frames import roller_transform, rotation_z
 from prs_geom.geometry.profiles import ThreadProfile
 from prs_geom.model.design import PRSDesign
 
+__all__ = [
+    "BAND_SLACK_MM", "BOUND_SAMPLES", "Comparison", "DEFAULT_TOL_MM", "EDGE_STEPS", "LOADED_FLANKS",
+    "MAX_PATCH_GROWTH", "MAX_RADIAL_STEP_MM", "PATCH_HALF_SIZE_MM", "SIDE_NAMES", "SideResult",
+    "TRANSFORM_SAMPLES", "VERIFY_CLEARANCE_MM", "bvh_model", "check_comparisons", "comparison_warning",
+    "flank_patch", "load_model_deviation", "patch_radii", "patch_steps", "transform_error", "verify_contacts",
+    "verify_side",
+]
+
 #: Default chordal tolerance (mm) of the two patches together: 0.01 um, far below the
 #: 0.01-0.5 um tooth-to-tooth steps of the graded gaps.
 DEFAULT_TOL_MM = 1e-5

@@ -26,6 +26,8 @@ from numpy.typing import NDArray
 from prs_geom.geometry.gears import SpurGear
 from prs_geom.model.errors import DesignError
 
+__all__ = ["gear_mesh", "star_shaped"]
+
 _TWO_PI = 2.0 * math.pi
 
 

@@ -48,6 +48,15 @@ from prs_geom.geometry.datum import DatumMark
 from prs_geom.geometry.helix import PitchWarp, identity_warp
 from prs_geom.geometry.profiles import ThreadProfile
 
+__all__ = [
+    "COLUMN_MARGIN", "DEVIATION_CHUNK_FACES", "EndPolygon", "FACE_BODY", "FACE_END_HI", "FACE_END_LO",
+    "FACE_MARK", "FACE_THREAD", "Tessellation", "ThreadMesh", "VOLUME_ACCURACY", "analytic_radius",
+    "analytic_thread_volume", "axial_line_crossings", "choose_tessellation", "cut_datum_mark",
+    "deviation_warnings", "flank_distance", "float32_rounding", "from_manifold", "manifold_status",
+    "measure_deviation", "merge_strips", "mesh_report", "part_chord_tolerance", "profile_distance",
+    "profile_strands", "thread_mesh", "to_manifold",
+]
+
 FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY, FACE_MARK = 0, 1, 2, 3, 4
 #: Columns closer than this fraction of a column step to a strand end are dropped, so
 #: that no sliver triangles appear next to the end planes.
@@ -95,7 +104,7 @@ def choose_tessellation(profile: ThreadProfile, tol: float, body_radius: float |
     # profile chord: a quarter of the tolerance in the axial section, where the flank is
     # stretched by 1/cos(lambda)
     radii = profile.flank.sample_radii(r_root, r_crest, k, 0.25 * tol * profile.cos_lead)
-    return Tessellation(n_cols, radii, tol)
+    return Tessellation(columns_per_turn=n_cols, flank_radii=radii, chord_tolerance=tol)
 
 
 def profile_strands(profile: ThreadProfile, tess: Tessellation) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
