@@ -1,4 +1,4 @@
-"""Assembly placement and phases (issue 3)."""
+"""Assembly placement and phases; part volumes of the rigid bodies."""
 import math
 
 import numpy as np
