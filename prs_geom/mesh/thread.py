@@ -426,6 +426,11 @@ class EndPolygon:
     theta: NDArray[np.float64]
     points: NDArray[np.float64]
 
+    def __post_init__(self) -> None:
+        if not len(self.ids) == len(self.theta) == len(self.points) or np.shape(self.points)[1:] != (3,):
+            raise ValueError(f"an end polygon needs one theta and one (x, y, z) point per vertex id, got "
+                             f"{len(self.ids)} ids, {len(self.theta)} angles, points {np.shape(self.points)}")
+
 
 def _end_polygons(cols: _Columns, end_theta: NDArray[np.float64],
                   end_points: NDArray[np.float64]) -> tuple[EndPolygon, EndPolygon]:
