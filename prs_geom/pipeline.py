@@ -544,6 +544,7 @@ def stage_mechanism(ctx: BuildContext) -> None:
     the running mechanism (``kinematics``); and the parts list (``parts_list``,
     parts_list.csv and parts_list.xlsx)."""
     from prs_geom.exports.bom import parts_list, parts_list_csv, write_parts_list_xlsx
+    from prs_geom.mesh.volumes import part_volumes
     from prs_geom.geometry.mechanism import layout
 
     d = ctx.design
@@ -564,7 +565,7 @@ def stage_mechanism(ctx: BuildContext) -> None:
         pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
     else:
         ctx.report["kinematics"] = kinematics(d, ctx.contact).as_dict()
-    rows = parts_list(d, asm)
+    rows = parts_list(d, part_volumes(asm))
     ctx.report["parts_list"] = [r.as_dict() for r in rows]
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())

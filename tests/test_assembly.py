@@ -1,4 +1,4 @@
-"""Assembly placement and phases (issue 3)."""
+"""Assembly placement and phases; part volumes of the rigid bodies."""
 import math
 
 import numpy as np
@@ -6,6 +6,7 @@ import pytest
 
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, carrier_angles, roller_transform
 from prs_geom.mesh.assembly import build_assembly
+from prs_geom.mesh.volumes import part_volumes
 from prs_geom.model.design import PRSDesign, Roller, Thread, default_design
 from prs_geom.mesh.thread import axial_line_crossings
 
@@ -98,6 +99,15 @@ def test_scene_names_and_gear_parts():
     assert V.shape[1] == 3 and np.isfinite(V).all()
     start = int(np.argmin(np.linalg.norm(V - m3.vertices[0], axis=1)))
     np.testing.assert_allclose(V[start:start + len(m3.vertices)], m3.vertices, atol=1e-12, rtol=0)
+    # one volume per rigid body: a roller with its gears (they meet in end faces: no overlap)
+    vol = part_volumes(asm)
+    assert set(vol) == {asm.rigid_body(n) for n in asm.placed}
+    assert vol["screw"] == float(asm.placed["screw"][0].volume)
+    assert len({vol[f"roller_{k}"] for k in range(4)}) == 1
+    roller = [m for n, (m, _, _) in asm.placed.items() if asm.rigid_body(n) == "roller_0"]
+    assert vol["roller_0"] == pytest.approx(sum(float(m.volume) for m in roller), rel=1e-12)
+    nut = [m for n, (m, _, _) in asm.placed.items() if asm.rigid_body(n) == "nut"]
+    assert 0.0 < vol["nut"] <= sum(float(m.volume) for m in nut) * (1 + 1e-12)
 
 
 def test_end_gears_mesh_with_the_ring_gear_by_the_backlash_and_carry_the_thread():

@@ -1,4 +1,4 @@
-"""FCL verification of the per-tooth gaps (issue 4): every tooth of every roller, both sides,
+"""FCL verification of the per-tooth gaps: every tooth of every roller, both sides,
 FCL gaps against the designed gaps, on constant-pitch and graded designs."""
 import dataclasses
 import math
@@ -296,18 +296,14 @@ def test_transform_error_is_that_of_the_warp_slope_mismatch(graded):
 
 
 # --------------------------------------------------------------------------- regressions
-# Issue: on valid designs whose rollers do not all mesh alike with the nut (screw and nut
-# starts differ: sizing warnings, not errors) the FCL distance differed from the analytic
-# one by 0.1-0.3 mm without a warning. Cause: one common axial roller shift (0.005 mm plus
-# the largest interference) left the other rollers up to a few tenths of a millimetre off
-# their nut flank; at that separation the analytic nearest points leave the shallow real
-# flank (they lie on the continuation of the analytic surfaces beyond root and crest) and
-# the fixed 0.35 mm patches around the axial-gap contact no longer hold FCL's nearest
-# points. Now every roller is settled on its own (rigid shift per roller) and the patches are
-# centred on, and cover, the analytic nearest points. Before -> after (max |FCL - analytic|):
-# A 0.127 -> 8e-5 mm, B 0.214 -> 1.2e-4 mm, C 0.018 -> 6e-5 mm, D 0.216 -> 6e-5 mm.
-# With every roller checked (not 3), a roller of C whose teeth sit half a pitch between two
-# nut teeth has analytic nearest points off the real flank: warned, with that reason.
+# Valid designs whose rollers do not all mesh alike with the nut (screw and nut starts
+# differ: sizing warnings, not errors). One common axial shift would leave the other rollers
+# a few tenths of a millimetre off their nut flank, where the analytic nearest points leave
+# the shallow real flank; so every roller is settled on its own (rigid shift per roller) and
+# the patches are centred on, and cover, the analytic nearest points. Max |FCL - analytic|
+# on these designs: A 8e-5 mm, B 1.2e-4 mm, C 6e-5 mm, D 6e-5 mm. A roller of C whose teeth
+# sit half a pitch between two nut teeth has analytic nearest points off the real flank:
+# warned, with that reason.
 
 
 def _design(beta, p, ns, nn, dr, z, n, hand="right", inst="tension-compression"):
@@ -335,7 +331,7 @@ REGRESSIONS = {
 def test_fcl_agrees_on_designs_whose_rollers_mesh_differently(name):
     d = REGRESSIONS[name]()
     rep = verify_contacts(d)
-    # the rollers sit at different axial offsets on the nut: what used to break the check
+    # the rollers sit at different axial offsets on the nut
     assert rep["patches"]["nut"]["axial_separation_mm"] > 0.1
     assert rep["difference_tolerance_mm"] == rep["patch_chord_tolerance_mm"]
     warned = set()

@@ -1,4 +1,4 @@
-"""Interference check (issue 4): nominal screw interferes, corrected screw does not."""
+"""Interference check: nominal screw interferes, corrected screw does not."""
 import json
 
 

@@ -1,4 +1,4 @@
-"""Interference check speed-up (issue 17): the nominal-screw check reuses the BVHs, solids and
+"""Interference check reuse: the nominal-screw check reuses the BVHs, solids and
 pair outcomes of the corrected-screw check, and reports what a check from scratch reports."""
 from __future__ import annotations
 

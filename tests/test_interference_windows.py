@@ -1,4 +1,4 @@
-"""Windowed interference check of long designs (issue 17): checked slab by slab, a design
+"""Windowed interference check of long designs: checked slab by slab, a design
 gives the verdict, the pair rows, the overlap volumes, thicknesses, contact counts and teeth of
 the whole check, and the slabs tile the axis."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Thread meshes against the analytic surfaces (issue 3)."""
+"""Thread meshes against the analytic surfaces."""
 import dataclasses
 import math
 import os
@@ -333,13 +333,13 @@ def test_profile_distance_is_the_distance_on_steep_flanks(part, beta):
 
 
 @pytest.mark.parametrize("beta, pitch, roller_d, starts, outer_d, tol", [
-    (10.0, 1.1875, 4.0, 4, 19.25, 0.1),     # found by the flank-angle test: 1.46 tol before
-    (12.4, 1.0, 4.9, 6, None, 0.001),       # wall 0.1 % of the root diameter: 10 tol before
+    (10.0, 1.1875, 4.0, 4, 19.25, 0.1),     # near-radial flank, coarse tolerance
+    (12.4, 1.0, 4.9, 6, None, 0.001),       # wall 0.1 % of the root diameter
 ])
 def test_thin_nut_end_faces_stay_within_tolerance(beta, pitch, roller_d, starts, outer_d, tol):
     """The nut's end annulus must not cover the thread groove: with a near-radial flank the
-    end curve has a deep notch at the root corner, and edges from a coarse outer ring to
-    the polygon used to cut across it."""
+    end curve has a deep notch at the root corner, which an edge from a coarse outer ring
+    to the polygon could cut across."""
     root_d = starts * roller_d + 2 * 0.8 * pitch / (4 * math.tan(math.radians(beta)))
     d = PRSDesign(thread=Thread(pitch_mm=pitch, flank_half_angle_deg=beta, engaged_teeth=3),
                   screw=Screw(pitch_diameter_mm=(starts - 2) * roller_d, starts=starts),

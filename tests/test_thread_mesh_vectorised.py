@@ -1,10 +1,10 @@
-"""The vectorised thread mesher against the straightforward construction (issue 17).
+"""The vectorised thread mesher against a straightforward reference construction.
 
 ``thread_mesh`` writes the regular middle of every band arithmetically, tabulates cos, sin
 and the helix advance per column, and merges only the pieces next to the end planes. The
-reference below is the construction it replaced, kept as plain as possible: every vertex
-computed on its own, every band's two chains built in a loop and merged in theta with a
-lexsort, the end faces from those. The mesher must give the same arrays bit for bit.
+reference below is kept as plain as possible: every vertex computed on its own, every
+band's two chains built in a loop and merged in theta with a lexsort, the end faces from
+those. The mesher must give the same arrays bit for bit.
 """
 import math
 

@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from prs_geom.analysis.contact import ContactPoint, ContactResult, analyse_contact
-from prs_geom.geometry.frames import carrier_angles, roller_transform
+from prs_geom.geometry.frames import carrier_angles, roller_transform, rotation_z
 from prs_geom.model.design import SIZING_RTOL, PRSDesign
 
 TWO_PI = 2.0 * math.pi
@@ -422,15 +422,6 @@ def kinematics(design: PRSDesign, contact: ContactResult | None = None) -> Kinem
 
 
 # --------------------------------------------------------------------------- poses
-def _rotations_z(angles: NDArray) -> NDArray[np.float64]:
-    """(N, 4, 4) rotations about z by ``angles`` (rad)."""
-    c, s = np.cos(angles), np.sin(angles)
-    T = np.zeros(angles.shape + (4, 4))
-    T[..., 0, 0], T[..., 0, 1], T[..., 1, 0], T[..., 1, 1] = c, -s, s, c
-    T[..., 2, 2] = T[..., 3, 3] = 1.0
-    return T
-
-
 def _translations_z(z: NDArray) -> NDArray[np.float64]:
     """(N, 4, 4) translations along z by ``z`` (mm)."""
     T = np.zeros(z.shape + (4, 4))
@@ -500,11 +491,11 @@ def poses(design: PRSDesign, screw_angles_rad: ArrayLike) -> Poses:
     r = speed_ratios(design)
     turns = phi / TWO_PI
     nut = _translations_z(r.nut_travel_per_turn_mm * turns)
-    carrier = nut @ _rotations_z(r.carrier * phi)
+    carrier = nut @ rotation_z(r.carrier * phi)
     static = np.stack([roller_transform(design, k) for k in range(design.roller.count)])  # (z, 4, 4)
     # spin about the roller's own axis: right-multiply in its part frame
     in_carrier = (_translations_z(r.roller_drift_per_turn_mm * turns)[None]
-                  @ static[:, None] @ _rotations_z(r.roller_relative * phi)[None])
+                  @ static[:, None] @ rotation_z(r.roller_relative * phi)[None])
     world = carrier[None] @ in_carrier
-    return Poses(_frozen(phi.copy()), _frozen(_rotations_z(phi)), _frozen(carrier), _frozen(nut),
+    return Poses(_frozen(phi.copy()), _frozen(rotation_z(phi)), _frozen(carrier), _frozen(nut),
                  _frozen(world), _frozen(in_carrier))

@@ -73,6 +73,7 @@ artificial patch edge after ``MAX_PATCH_GROWTH`` doublings of the patch.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -86,9 +87,17 @@ from numpy.typing import NDArray
 from prs_geom.analysis.contact import (ContactBatch, PartFlanks, euclidean_distance, solve_collinear,
                                        theoretical_screw, tooth_contacts)
 from prs_geom.analysis.loads import gap_terms
-from prs_geom.geometry.frames import roller_transform
+from prs_geom.geometry.frames import roller_transform, rotation_z
 from prs_geom.geometry.profiles import ThreadProfile
 from prs_geom.model.design import PRSDesign
+
+__all__ = [
+    "BAND_SLACK_MM", "BOUND_SAMPLES", "Comparison", "DEFAULT_TOL_MM", "EDGE_STEPS", "LOADED_FLANKS",
+    "MAX_PATCH_GROWTH", "MAX_RADIAL_STEP_MM", "PATCH_HALF_SIZE_MM", "SIDE_NAMES", "SideResult",
+    "TRANSFORM_SAMPLES", "VERIFY_CLEARANCE_MM", "bvh_model", "check_comparisons", "comparison_warning",
+    "flank_patch", "load_model_deviation", "patch_radii", "patch_steps", "transform_error", "verify_contacts",
+    "verify_side",
+]
 
 #: Default chordal tolerance (mm) of the two patches together: 0.01 um, far below the
 #: 0.01-0.5 um tooth-to-tooth steps of the graded gaps.
@@ -249,14 +258,6 @@ def bvh_model(V: NDArray, F: NDArray) -> fcl.BVHModel:
     return g
 
 
-def _rot_z(a: NDArray) -> NDArray:
-    """Rotations about +z by the angles ``a`` (rad), shape (N, 3, 3)."""
-    c, s = np.cos(a), np.sin(a)
-    R = np.zeros((len(a), 3, 3))
-    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
-    return R
-
-
 @dataclass(frozen=True)
 class _Patch:
     """A flank patch's BVH in its part frame and the data to tell its artificial edges."""
@@ -293,8 +294,8 @@ def _build_patch(part: PartFlanks, r_pts: NDArray, r_c: float, th_c: float, m: f
     prof = part.profile
     real = (abs(lo - prof.inner_radius) <= 1e-12 * hi, abs(hi - prof.outer_radius) <= 1e-12 * hi)
     h_r, h_t = patch_steps(part, tol, lo, hi)
-    return _Patch(fcl.CollisionObject(bvh_model(V, F), fcl.Transform()), lo, hi, real, th_c,
-                  half / r_c, h_r, h_t, err, int(len(F)))
+    return _Patch(obj=fcl.CollisionObject(bvh_model(V, F), fcl.Transform()), r_lo=lo, r_hi=hi, r_edge_real=real,
+                  th_c=th_c, half_angle=half / r_c, step_r=h_r, step_t=h_t, error=err, triangles=int(len(F)))
 
 
 def _helix_z(part: PartFlanks, m: NDArray, th: NDArray) -> NDArray:
@@ -394,6 +395,146 @@ def _off_band(part: PartFlanks, r: NDArray) -> NDArray:
     return (r < prof.inner_radius - BAND_SLACK_MM) | (r > prof.outer_radius + BAND_SLACK_MM)
 
 
+@dataclass(frozen=True)
+class _Settled:
+    """The analytic side of one side's check: the contacts at the nominal placement and with
+    every roller settled (rigid axial ``shift`` per contact, mm, positive opens the flanks).
+
+    ``d_nominal`` / ``distance``: signed common-normal distances (mm) at the nominal and
+    the settled placement; ``q``: the settled nearest-point parameters (r, theta, rho, phi);
+    ``point_a``, ``point_b``: those points (screw frame, mm); ``normal_z``: |n_z| of the
+    nominal common normal; ``roller``, ``tooth``: each contact's roller and tooth.
+    """
+
+    batch: ContactBatch
+    shift: NDArray[np.float64]
+    d_nominal: NDArray[np.float64]
+    distance: NDArray[np.float64]
+    q: NDArray[np.float64]
+    point_a: NDArray[np.float64]
+    point_b: NDArray[np.float64]
+    normal_z: NDArray[np.float64]
+    roller: NDArray[np.int64]
+    tooth: NDArray[np.int64]
+
+
+def _settle(design: PRSDesign, side: str, flank: str, screw_profile: ThreadProfile | None) -> _Settled:
+    """Solve every contact of ``side`` at the nominal placement, then settle each roller to
+    ``VERIFY_CLEARANCE_MM`` at its closest tooth and solve again."""
+    z, n = design.roller.count, design.thread.engaged_teeth
+    batch, q0, info = tooth_contacts(design, side, flank, screw_profile=screw_profile)
+    nominal = solve_collinear(batch, q0)
+    d_nominal, q_nominal = euclidean_distance(batch, nominal.q)
+    # the axial gap of the collinear solution changes by exactly the rigid shift
+    shift = np.repeat(VERIFY_CLEARANCE_MM - nominal.gap.reshape(z, n).min(axis=1), n)
+    settled = dataclasses.replace(batch, z_offset=-batch.xi_b * shift)
+    dist, q = euclidean_distance(settled, solve_collinear(settled, nominal.q).q)
+    pa, pb = settled.points(q)
+    na, _ = batch.normals(q_nominal)
+    return _Settled(batch=settled, shift=shift, d_nominal=d_nominal, distance=dist, q=q, point_a=pa,
+                    point_b=pb, normal_z=np.abs(na[:, 2]), roller=info["roller"], tooth=info["tooth"])
+
+
+def _off_flank_notes(side: str, settled: _Settled) -> list[list[str]]:
+    """Per contact, the note that its analytic nearest point lies off the real flank (empty
+    when it lies on it)."""
+    ra, _, rb, _ = settled.q.T
+    notes: list[list[str]] = [[] for _ in range(settled.batch.n)]
+    for name, part, r in ((side, settled.batch.A, ra), ("roller", settled.batch.B, rb)):
+        for i in np.flatnonzero(_off_band(part, r)):
+            notes[i].append(f"{name} r = {r[i]:.4f} mm outside its flank {part.profile.inner_radius:.4f}-"
+                            f"{part.profile.outer_radius:.4f} mm")
+    return [["the analytic nearest point lies off the real flank (" + "; ".join(nt) + "): the analytic "
+             "surfaces continue beyond root and crest, so this is an edge contact the analytic model "
+             "does not describe"] if nt else [] for nt in notes]
+
+
+@dataclass(frozen=True)
+class _Placements:
+    """Where each contact puts the two patches: part frame -> screw frame, rotations
+    ``rot_*`` (N, 3, 3) and translations ``shift_*`` (N, 3, mm); ``ref_*``: the contact
+    each patch is built at."""
+
+    ref_a: int
+    ref_b: int
+    rot_a: NDArray[np.float64]
+    shift_a: NDArray[np.float64]
+    rot_b: NDArray[np.float64]
+    shift_b: NDArray[np.float64]
+
+
+def _placements(design: PRSDesign, settled: _Settled, perturb: NDArray[np.float64]) -> _Placements:
+    """Rotate the reference nearest point's angle onto each contact's and shift by the helix
+    between them; the roller patch then goes where the assembly puts roller k, plus the
+    settling shift and the perturbation ``perturb`` (mm, per roller)."""
+    b = settled.batch
+    _, tha, _, phb = settled.q.T
+    ref_a, ref_b = _reference(b.A, b.m_a, tha), _reference(b.B, b.m_b, phb)
+    h_a = _helix_z(b.A, b.m_a, tha)
+    h_b = _helix_z(b.B, b.m_b, phb)
+    rot_a = np.ascontiguousarray(rotation_z(tha - tha[ref_a])[:, :3, :3])
+    shift_a = np.zeros((b.n, 3))
+    shift_a[:, 2] = h_a - h_a[ref_a]
+    roller_frames = np.stack([roller_transform(design, k) for k in range(design.roller.count)])[settled.roller]
+    rot_b = roller_frames[:, :3, :3] @ np.ascontiguousarray(rotation_z(phb - phb[ref_b])[:, :3, :3])
+    shift_b = roller_frames[:, :3, 3].copy()
+    shift_b[:, 2] += h_b - h_b[ref_b] + b.z_offset + perturb[settled.roller]
+    return _Placements(ref_a=ref_a, ref_b=ref_b, rot_a=rot_a, shift_a=shift_a, rot_b=rot_b, shift_b=shift_b)
+
+
+@dataclass(frozen=True)
+class _Measured:
+    """FCL's distances (mm) and nearest points (N, 2, 3; screw frame) at every contact, the
+    patches of the last round and their margin ``half`` (mm), which contacts still had a
+    nearest point on an artificial patch edge, and the time (s) spent building patches and in FCL."""
+
+    distance: NDArray[np.float64]
+    nearest: NDArray[np.float64]
+    patch_a: _Patch
+    patch_b: _Patch
+    half: float
+    on_edge: NDArray[np.bool_]
+    patch_time: float
+    fcl_time: float
+
+
+def _fcl_distances(settled: _Settled, place: _Placements, tol: float) -> _Measured:
+    """Build the two patches at the reference contacts and measure every placed pair with
+    FCL; grow the patches (x2, at most ``MAX_PATCH_GROWTH`` times) while a nearest point
+    lies on an artificial patch edge."""
+    b = settled.batch
+    ra, tha, rb, phb = settled.q.T
+    ref_a, ref_b = place.ref_a, place.ref_b
+    t_patch = t_fcl = 0.0
+    half = PATCH_HALF_SIZE_MM
+    req = fcl.DistanceRequest(enable_nearest_points=True)
+    d_fcl = np.empty(b.n)
+    near = np.empty((b.n, 2, 3))
+    for growth in range(MAX_PATCH_GROWTH + 1):
+        tp = time.perf_counter()
+        pA = _build_patch(b.A, ra, ra[ref_a], tha[ref_a], b.m_a[ref_a], b.xi_a[ref_a], 0.5 * tol, half)
+        pB = _build_patch(b.B, rb, rb[ref_b], phb[ref_b], b.m_b[ref_b], b.xi_b[ref_b], 0.5 * tol, half)
+        tf = time.perf_counter()
+        t_patch += tf - tp
+        for i in range(b.n):
+            pA.obj.setTransform(fcl.Transform(place.rot_a[i], place.shift_a[i]))
+            pB.obj.setTransform(fcl.Transform(place.rot_b[i], place.shift_b[i]))
+            res = fcl.DistanceResult()
+            d_fcl[i] = fcl.distance(pA.obj, pB.obj, req, res)
+            near[i] = res.nearest_points
+        t_fcl += time.perf_counter() - tf
+        # nearest points back into the patch frames (R^T (p - t)); touching or overlapping
+        # patches have no meaningful nearest points
+        loc_a = np.einsum("nji,nj->ni", place.rot_a, near[:, 0] - place.shift_a)
+        loc_b = np.einsum("nji,nj->ni", place.rot_b, near[:, 1] - place.shift_b)
+        on_edge = (d_fcl > 0) & (pA.on_artificial_edge(loc_a) | pB.on_artificial_edge(loc_b))
+        if not on_edge.any() or growth == MAX_PATCH_GROWTH:
+            break
+        half *= 2.0
+    return _Measured(distance=d_fcl, nearest=near, patch_a=pA, patch_b=pB, half=half, on_edge=on_edge,
+                     patch_time=t_patch, fcl_time=t_fcl)
+
+
 def verify_side(design: PRSDesign, side: str, tol: float, screw_profile: ThreadProfile | None = None,
                 designed_gaps: Mapping[str, Any] | None = None,
                 roller_offsets_mm: Sequence[float] | NDArray | None = None) -> SideResult:
@@ -419,102 +560,45 @@ def verify_side(design: PRSDesign, side: str, tol: float, screw_profile: ThreadP
     t0 = time.perf_counter()
     flank = LOADED_FLANKS[side]
     z, n = design.roller.count, design.thread.engaged_teeth
-    batch, q0, info = tooth_contacts(design, side, flank, screw_profile=screw_profile)
-    # nominal placement: the designed gaps (common-normal distance, signed)
-    nominal = solve_collinear(batch, q0)
-    d_nominal, q_nominal = euclidean_distance(batch, nominal.q)
-    # settle each roller (rigid axial shift, positive opens) to VERIFY_CLEARANCE_MM at its
-    # closest tooth; the axial gap of the collinear solution changes by exactly the shift
-    ax = nominal.gap.reshape(z, n)
-    shift = np.repeat(VERIFY_CLEARANCE_MM - ax.min(axis=1), n)
-    settled = ContactBatch(batch.A, batch.B, batch.m_a, batch.xi_a, batch.m_b, batch.xi_b, batch.ox,
-                           batch.oy, batch.alpha, -batch.xi_b * shift)
-    dist, q = euclidean_distance(settled, solve_collinear(settled, nominal.q).q)
-    pa, pb = settled.points(q)
-    na, _ = batch.normals(q_nominal)
-    n_z = np.abs(na[:, 2])
-    designed = d_nominal if designed_gaps is None else _designed_values(designed_gaps, side, flank, z, n)
+    settled = _settle(design, side, flank, screw_profile)
+    designed = settled.d_nominal if designed_gaps is None else _designed_values(designed_gaps, side, flank, z, n)
     g_nr, g_rs = gap_terms(design)
     load_gap = np.tile(g_rs if side == "screw" else g_nr, z)
     perturb = np.zeros(z) if roller_offsets_mm is None else np.asarray(roller_offsets_mm, dtype=np.float64)
     if perturb.shape != (z,):
         raise ValueError(f"roller_offsets_mm must have one value per roller ({z}), got shape {perturb.shape}")
-
-    A, B = settled.A, settled.B
-    ra, tha, rb, phb = q.T
-    notes: list[list[str]] = [[] for _ in range(settled.n)]
-    for name, part, r in ((side, A, ra), ("roller", B, rb)):
-        for i in np.flatnonzero(_off_band(part, r)):
-            notes[i].append(f"{name} r = {r[i]:.4f} mm outside its flank {part.profile.inner_radius:.4f}-"
-                            f"{part.profile.outer_radius:.4f} mm")
-    notes = [["the analytic nearest point lies off the real flank (" + "; ".join(nt) + "): the analytic "
-              "surfaces continue beyond root and crest, so this is an edge contact the analytic model "
-              "does not describe"] if nt else [] for nt in notes]
-
-    ref_a, ref_b = _reference(A, settled.m_a, tha), _reference(B, settled.m_b, phb)
-    hA = _helix_z(A, settled.m_a, tha)
-    hB = _helix_z(B, settled.m_b, phb)
-    # patch placements, part frame -> screw frame: rotate the reference nearest point's angle
-    # onto the contact's and shift by the helix between them; the roller patch then goes where
-    # the assembly puts roller k, plus the settling shift and the perturbation
-    RA = _rot_z(tha - tha[ref_a])
-    tA = np.zeros((settled.n, 3))
-    tA[:, 2] = hA - hA[ref_a]
-    Tk = np.stack([roller_transform(design, k) for k in range(z)])[info["roller"]]
-    RB = Tk[:, :3, :3] @ _rot_z(phb - phb[ref_b])
-    tB = Tk[:, :3, 3].copy()
-    tB[:, 2] += hB - hB[ref_b] + settled.z_offset + perturb[info["roller"]]
-
+    notes = _off_flank_notes(side, settled)
+    place = _placements(design, settled, perturb)
     t1 = time.perf_counter()
-    t_patch = t_fcl = 0.0
-    half = PATCH_HALF_SIZE_MM
-    req = fcl.DistanceRequest(enable_nearest_points=True)
-    d_fcl = np.empty(settled.n)
-    near = np.empty((settled.n, 2, 3))
-    for growth in range(MAX_PATCH_GROWTH + 1):
-        tp = time.perf_counter()
-        pA = _build_patch(A, ra, ra[ref_a], tha[ref_a], settled.m_a[ref_a], settled.xi_a[ref_a],
-                          0.5 * tol, half)
-        pB = _build_patch(B, rb, rb[ref_b], phb[ref_b], settled.m_b[ref_b], settled.xi_b[ref_b],
-                          0.5 * tol, half)
-        tf = time.perf_counter()
-        t_patch += tf - tp
-        for i in range(settled.n):
-            pA.obj.setTransform(fcl.Transform(RA[i], tA[i]))
-            pB.obj.setTransform(fcl.Transform(RB[i], tB[i]))
-            res = fcl.DistanceResult()
-            d_fcl[i] = fcl.distance(pA.obj, pB.obj, req, res)
-            near[i] = res.nearest_points
-        t_fcl += time.perf_counter() - tf
-        # nearest points back into the patch frames (R^T (p - t)); touching or overlapping
-        # patches have no meaningful nearest points
-        locA = np.einsum("nji,nj->ni", RA, near[:, 0] - tA)
-        locB = np.einsum("nji,nj->ni", RB, near[:, 1] - tB)
-        on_edge = (d_fcl > 0) & (pA.on_artificial_edge(locA) | pB.on_artificial_edge(locB))
-        if not on_edge.any() or growth == MAX_PATCH_GROWTH:
-            break
-        half *= 2.0
-    for i in np.flatnonzero(on_edge):
-        notes[i].append(f"FCL's nearest point lies on an edge of the {2 * half:.3g} mm patch")
+    fcl_run = _fcl_distances(settled, place, tol)
+    for i in np.flatnonzero(fcl_run.on_edge):
+        notes[i].append(f"FCL's nearest point lies on an edge of the {2 * fcl_run.half:.3g} mm patch")
 
-    e_tr = (transform_error(A, settled.m_a, tha, ref_a, pA.half_angle)
-            + transform_error(B, settled.m_b, phb, ref_b, pB.half_angle))
-    fcl_gap = d_fcl - (dist - d_nominal)
-    pdiff = np.maximum(np.linalg.norm(near[:, 0] - pa, axis=1), np.linalg.norm(near[:, 1] - pb, axis=1))
-    comps = [Comparison(side, flank, int(info["roller"][i]), int(info["tooth"][i]), float(dist[i]),
-                        float(d_fcl[i]), float(pdiff[i]), float(designed[i]), float(fcl_gap[i]),
-                        float(n_z[i]), float(load_gap[i])) for i in range(settled.n)]
+    b, (_, tha, _, phb) = settled.batch, settled.q.T
+    pA, pB = fcl_run.patch_a, fcl_run.patch_b
+    e_tr = (transform_error(b.A, b.m_a, tha, place.ref_a, pA.half_angle)
+            + transform_error(b.B, b.m_b, phb, place.ref_b, pB.half_angle))
+    dist, d_fcl, near = settled.distance, fcl_run.distance, fcl_run.nearest
+    fcl_gap = d_fcl - (dist - settled.d_nominal)
+    pdiff = np.maximum(np.linalg.norm(near[:, 0] - settled.point_a, axis=1),
+                       np.linalg.norm(near[:, 1] - settled.point_b, axis=1))
+    comps = [Comparison(side=side, flank=flank, roller=int(settled.roller[i]), tooth=int(settled.tooth[i]),
+                        analytic_distance_mm=float(dist[i]), fcl_distance_mm=float(d_fcl[i]),
+                        point_difference_mm=float(pdiff[i]), designed_gap_mm=float(designed[i]),
+                        fcl_gap_mm=float(fcl_gap[i]), normal_axial_component=float(settled.normal_z[i]),
+                        load_model_gap_mm=float(load_gap[i])) for i in range(b.n)]
     patches = {
         "flank": flank,
         "patch_error_mm": max(pA.error, pB.error),
         "patch_triangles": pA.triangles + pB.triangles,
-        "patch_half_size_mm": half,
-        "axial_separation_mm": float(np.max(np.abs(shift))),
-        "settling_nonlinearity_mm": float(np.max(np.abs((dist - d_nominal) - n_z * shift))),
+        "patch_half_size_mm": fcl_run.half,
+        "axial_separation_mm": float(np.max(np.abs(settled.shift))),
+        "settling_nonlinearity_mm": float(np.max(np.abs((dist - settled.d_nominal)
+                                                        - settled.normal_z * settled.shift))),
         "transform_error_bound_mm": float(e_tr.max()),
     }
-    timings = {"analytic": t1 - t0, "patches": t_patch, "fcl": t_fcl}
-    return SideResult(comps, ["; ".join(nt) for nt in notes], patches, timings)
+    timings = {"analytic": t1 - t0, "patches": fcl_run.patch_time, "fcl": fcl_run.fcl_time}
+    return SideResult(comparisons=comps, notes=["; ".join(nt) for nt in notes], patches=patches, timings=timings)
 
 
 def comparison_warning(c: Comparison, tolerance: float, note: str = "") -> str:

@@ -34,6 +34,11 @@ from prs_geom.checks.fcl import bvh_model
 from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, check_windows
 from prs_geom.progress import ProgressFn, silent
 
+__all__ = [
+    "MAX_CONTACTS", "body_pairs", "check_assembly", "interference", "interference_checks", "pair_overlaps",
+    "windowed_interference_checks",
+]
+
 MAX_CONTACTS = 20000
 
 

@@ -23,6 +23,8 @@ import numpy as np
 from prs_geom.checks.fcl import bvh_model
 from prs_geom.geometry.mechanism import MechanismLayout
 
+__all__ = ["journal_clearances", "mechanism_section"]
+
 
 def journal_clearances(asm: Any, lay: MechanismLayout) -> list[dict[str, Any]]:
     """FCL distance (mm) between each roller journal and its carrier, with the fit's radial

@@ -3,8 +3,8 @@ of report.html.
 
 One row per distinct part: item number (the balloon number of the assembly drawing), part,
 quantity, material and density (``materials.*`` of the design), the volume of one piece
-from its meshes (the rigid body's parts, their overlaps counted once: a roller with its
-gears and journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
+(:func:`prs_geom.mesh.volumes.part_volumes`: from the meshes of its rigid body, a roller
+with its gears and journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
 and the standard designation where there is one (the DIN 472 retaining ring). Masses are
 in kg, volumes in mm^3; the CSV keeps full float64 precision.
 
@@ -16,13 +16,17 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from prs_geom.exports.textsafe import csv_comment, csv_field, xlsx_append
+
+__all__ = [
+    "COLUMNS", "PartItem", "PartsListRow", "part_items", "parts_list", "parts_list_csv", "read_parts_list_csv",
+    "read_parts_list_xlsx", "write_parts_list_xlsx",
+]
 
 #: Columns: key, title, unit.
 COLUMNS = (("item", "item", ""), ("part", "part", ""), ("quantity", "quantity", ""),
@@ -55,42 +59,6 @@ class PartsListRow:
 
     def as_dict(self) -> dict[str, Any]:
         return {**asdict(self), "mass_kg": self.mass_kg, "total_mass_kg": self.total_mass_kg}
-
-
-def body_volumes(asm: Any) -> dict[str, float]:
-    """Volume (mm^3) of each rigid body of the assembly: the sum of its parts' mesh volumes
-    less the volume of every overlap of two of its parts (manifold3d), so that a part
-    overlapping another of its body (the nut end around the ring gear) counts once.
-
-    Only pairs whose bounding boxes overlap with positive thickness on every axis are
-    intersected (parts that meet in an end face, like the threads and the gears, do not
-    overlap); the result is exact while no three parts share a region, which the layout
-    of docs/theory/mechanism.md guarantees. Bodies made of the same meshes (the rollers)
-    are computed once."""
-    from prs_geom.mesh.thread import to_manifold
-
-    def solid(m: Any) -> Any:
-        return to_manifold(m.vertices, m.faces)
-
-    bodies: dict[str, list[Any]] = {}
-    for name, (mesh, T, _) in asm.placed.items():
-        bodies.setdefault(asm.rigid_body(name), []).append(mesh)
-    done: dict[tuple[int, ...], float] = {}
-    out = {}
-    for body, meshes in bodies.items():
-        key = tuple(id(m) for m in meshes)
-        if key not in done:
-            total = sum(float(m.volume) for m in meshes)
-            boxes = [np.asarray(m.bounds) for m in meshes]
-            for i in range(len(meshes)):
-                for j in range(i + 1, len(meshes)):
-                    lo = np.maximum(boxes[i][0], boxes[j][0])
-                    hi = np.minimum(boxes[i][1], boxes[j][1])
-                    if np.all(hi - lo > 1e-9):
-                        total -= float((solid(meshes[i]) ^ solid(meshes[j])).volume())
-            done[key] = total
-        out[body] = done[key]
-    return out
 
 
 @dataclass(frozen=True)
@@ -131,14 +99,16 @@ def part_items(design: Any) -> list[PartItem]:
         rows.append(("carrier", 2, mats.carrier, "", f"carrier ring with {d.roller.count} journal bores", "carrier_lo"))
         rows.append(("retaining ring", 2, mats.retaining_ring, lay.ring.designation,
                      "internal retaining ring for bores", "retaining_ring_lo"))
-    return [PartItem(i, *row) for i, row in enumerate(rows, start=1)]
+    fields = ("part", "quantity", "material", "designation", "description", "body")
+    return [PartItem(item=i, **dict(zip(fields, row))) for i, row in enumerate(rows, start=1)]
 
 
-def parts_list(design: Any, asm: Any) -> list[PartsListRow]:
-    """The rows of the parts list of ``design`` from its placed assembly ``asm``."""
-    vol = body_volumes(asm)
-    return [PartsListRow(it.item, it.part, it.quantity, it.material.name, it.material.density_kg_m3,
-                         vol[it.body], it.designation, it.description) for it in part_items(design)]
+def parts_list(design: Any, volumes: Mapping[str, float]) -> list[PartsListRow]:
+    """The rows of the parts list of ``design``; ``volumes``: the volume (mm^3) of one piece
+    of every rigid body, by body name (:func:`prs_geom.mesh.volumes.part_volumes`)."""
+    return [PartsListRow(item=it.item, part=it.part, quantity=it.quantity, material=it.material.name,
+                         density_kg_m3=it.material.density_kg_m3, volume_mm3=volumes[it.body],
+                         designation=it.designation, description=it.description) for it in part_items(design)]
 
 
 def _cell(v: Any) -> str:

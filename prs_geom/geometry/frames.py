@@ -26,20 +26,49 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.helix import PitchWarp, identity_warp
 
+__all__ = [
+    "FIRST_MID_PITCHES", "carrier_angles", "part_warps", "roller_spin", "roller_transform", "rotation_z",
+    "screw_z_range", "thread_length", "translation",
+]
 
-def rotation_z(angle: float) -> NDArray[np.float64]:
-    c, s = math.cos(angle), math.sin(angle)
-    T = np.eye(4)
-    T[:2, :2] = [[c, -s], [s, c]]
+
+def rotation_z(angle: ArrayLike) -> NDArray[np.float64]:
+    """Homogeneous rotations about +z by ``angle`` (rad).
+
+    Right-handed: a positive angle turns +x toward +y, i.e. counter-clockwise seen from +z
+    looking down -z. Applied to column vectors, ``rotation_z(a) @ (x, y, z, 1)`` is the
+    point turned by ``a``::
+
+        [[cos a, -sin a, 0, 0],
+         [sin a,  cos a, 0, 0],
+         [0,      0,     1, 0],
+         [0,      0,     0, 1]]
+
+    Parameters
+    ----------
+    angle
+        A scalar or an array of angles (rad), any shape ``S``.
+
+    Returns
+    -------
+    NDArray[np.float64]
+        Shape ``S + (4, 4)``: (4, 4) for a scalar. The rotation alone is ``[..., :3, :3]``.
+    """
+    a = np.asarray(angle, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    T = np.zeros(a.shape + (4, 4))
+    T[..., 0, 0], T[..., 0, 1], T[..., 1, 0], T[..., 1, 1] = c, -s, s, c
+    T[..., 2, 2] = T[..., 3, 3] = 1.0
     return T
 
 
 def translation(x: float, y: float = 0.0, z: float = 0.0) -> NDArray[np.float64]:
+    """4x4 homogeneous translation by (x, y, z) (mm)."""
     T = np.eye(4)
     T[:3, 3] = (x, y, z)
     return T
@@ -63,10 +92,12 @@ def roller_transform(design: PRSDesign, k: int) -> NDArray[np.float64]:
 
 
 def thread_length(design: PRSDesign) -> float:
+    """Engaged thread length n p (mm): the roller and nut threads run over [0, n p]."""
     return design.thread.engaged_teeth * design.thread.pitch_mm
 
 
 def screw_z_range(design: PRSDesign) -> tuple[float, float]:
+    """(z_lo, z_hi) (mm) of the screw thread in the screw frame, centred on the nut thread."""
     extra = 0.5 * (design.screw.length_mm - thread_length(design))
     return -extra, thread_length(design) + extra
 

@@ -25,6 +25,12 @@ from prs_geom.mesh.thread import (ThreadMesh, cut_datum_mark, from_manifold, par
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.progress import ProgressFn, silent
 
+__all__ = [
+    "Assembly", "GEAR_CHORD_MM", "SIDES", "build_assembly", "build_part", "end_gears", "mechanism_parts",
+    "part_z_range", "scene_names", "window_assembly",
+]
+
+
 def part_z_range(design: PRSDesign, part: str) -> tuple[float, float]:
     """Axial extent (mm) of a part's thread in its own frame: the screw centred on the
     engaged length (:func:`~prs_geom.geometry.frames.screw_z_range`), roller and nut over it."""

@@ -1,7 +1,7 @@
 """Resource guard: refuse a mesh job the machine cannot hold, before it starts.
 
 The triangle count of a thread mesh follows from its tessellation
-(:func:`prs_geom.mesh.choose_tessellation`): ``strands x columns per turn x turns x 2``
+(:func:`prs_geom.mesh.thread.choose_tessellation`): ``strands x columns per turn x turns x 2``
 triangles on the thread surface, plus the end faces. A build meshes the parts three
 times: at the design's chord tolerance for the exports, at ``min(tolerance, 2 um)`` for
 the interference check (which also holds an FCL BVH and a manifold3d solid of every
@@ -25,6 +25,13 @@ from dataclasses import dataclass
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, PRSGeomError, format_value
 
+__all__ = [
+    "BASE_BYTES", "BYTES_PER_CHECK_TRIANGLE", "BYTES_PER_EXPORT_TRIANGLE", "BYTES_PER_PLACED_TRIANGLE",
+    "CHECK_TOLERANCE_MM", "CHECK_WINDOW_TEETH", "DATUM_SLOT_TRIANGLES", "DEFAULT_BUDGET_FRACTION", "Estimate",
+    "MEMORY_BUDGET_ENV", "ResourceLimitError", "WORK_MARGIN", "available_memory_bytes", "check_windows",
+    "default_budget_bytes", "estimate", "format_bytes", "guard", "parse_size", "part_triangles",
+]
+
 #: Share of the available memory a build may plan to use by default.
 DEFAULT_BUDGET_FRACTION = 0.6
 #: Bytes per triangle at the peak of each kind of mesh work (measured, rounded up):
@@ -34,7 +41,7 @@ BYTES_PER_CHECK_TRIANGLE = 1200
 BYTES_PER_EXPORT_TRIANGLE = 400
 BYTES_PER_PLACED_TRIANGLE = 120
 #: Interpreter, libraries and the analysis stages (bytes), per process; with the resource
-#: trackers the pool starts. Calibrated by benchmarks/bench_memory.py (issue 29).
+#: trackers the pool starts. Calibrated by benchmarks/bench_memory.py.
 BASE_BYTES = 320 * 2 ** 20
 #: Safety factor on the mesh work of the estimate: the peaks measured over the calibration
 #: grid of benchmarks/bench_memory.py (teeth 4-20, chord tolerance 1e-4 to 1e-2 mm, 0 and 2
@@ -210,8 +217,8 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers
     if check:
         peaks.append(check_tri * BYTES_PER_CHECK_TRIANGLE)
     work = WORK_MARGIN * (sum(peaks) if workers > 0 else max(peaks))
-    return Estimate(export_tri if export else 0.0, placed if export else 0.0, check_tri,
-                    BASE_BYTES * (1 + max(workers, 0)) + work, parts)
+    return Estimate(export_triangles=export_tri if export else 0.0, placed_triangles=placed if export else 0.0,
+                    check_triangles=check_tri, peak_bytes=BASE_BYTES * (1 + max(workers, 0)) + work, parts=parts)
 
 
 def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = True,

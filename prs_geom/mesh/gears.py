@@ -27,6 +27,8 @@ from prs_geom.geometry.gears import SpurGear
 from prs_geom.geometry.planar import rotation_2d
 from prs_geom.model.errors import DesignError
 
+__all__ = ["gear_mesh", "star_shaped"]
+
 _TWO_PI = 2.0 * math.pi
 
 

@@ -22,6 +22,8 @@ from prs_geom.geometry.mechanism import RING_GAP_RAD, MechanismLayout
 from prs_geom.mesh.thread import from_manifold
 from prs_geom.model.design import PRSDesign
 
+__all__ = ["MECHANISM_CHORD_MM", "mechanism_meshes", "segments"]
+
 #: The mechanism parts are never meshed coarser than this (mm).
 MECHANISM_CHORD_MM = 1e-3
 

@@ -16,7 +16,10 @@ the work per vertex and per triangle is a few numpy passes, see :func:`thread_me
   fans from the axis (external threads) or annuli to the body circle (nut). The nut's
   body circle also has a vertex at the angle of the top of every fall of the end polygon,
   so no edge from the circle to the polygon cuts across the deep notch a near-radial flank
-  makes in the end curve (small flank angles, thin walls: up to 10x the tolerance before).
+  makes in the end curve (small flank angles, thin walls).
+* :func:`thread_mesh` runs these as named steps: strands, column sampling, end points and
+  end polygons, band chains, end faces (:func:`_end_faces`, the only step that closes the
+  ends), then the vertex and face arrays.
 
 Tessellation from the chordal tolerance ``tol`` (mm): half of it for the helix sagitta
 r (1 - cos(dtheta / 2)) at the outermost radius, a quarter for the profile chord (the
@@ -33,6 +36,7 @@ Every vertex is computed on the analytic surface in float64.
 from __future__ import annotations
 
 import math
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -43,6 +47,15 @@ from numpy.typing import NDArray
 from prs_geom.geometry.datum import DatumMark
 from prs_geom.geometry.helix import PitchWarp, identity_warp
 from prs_geom.geometry.profiles import ThreadProfile
+
+__all__ = [
+    "COLUMN_MARGIN", "DEVIATION_CHUNK_FACES", "EndPolygon", "FACE_BODY", "FACE_END_HI", "FACE_END_LO",
+    "FACE_MARK", "FACE_THREAD", "Tessellation", "ThreadMesh", "VOLUME_ACCURACY", "analytic_radius",
+    "analytic_thread_volume", "axial_line_crossings", "choose_tessellation", "cut_datum_mark",
+    "deviation_warnings", "flank_distance", "float32_rounding", "from_manifold", "manifold_status",
+    "measure_deviation", "merge_strips", "mesh_report", "part_chord_tolerance", "profile_distance",
+    "profile_strands", "thread_mesh", "to_manifold",
+]
 
 FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY, FACE_MARK = 0, 1, 2, 3, 4
 #: Columns closer than this fraction of a column step to a strand end are dropped, so
@@ -91,7 +104,7 @@ def choose_tessellation(profile: ThreadProfile, tol: float, body_radius: float |
     # profile chord: a quarter of the tolerance in the axial section, where the flank is
     # stretched by 1/cos(lambda)
     radii = profile.flank.sample_radii(r_root, r_crest, k, 0.25 * tol * profile.cos_lead)
-    return Tessellation(n_cols, radii, tol)
+    return Tessellation(columns_per_turn=n_cols, flank_radii=radii, chord_tolerance=tol)
 
 
 def profile_strands(profile: ThreadProfile, tess: Tessellation) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -253,24 +266,24 @@ def _closed(ids: NDArray, th: NDArray) -> tuple[NDArray, NDArray]:
     return np.concatenate([ids, ids[:1]]), np.concatenate([th, th[:1] + 2.0 * math.pi])
 
 
-def _body_rings(polys: dict, P_lo: NDArray, P_hi: NDArray, nv: int, body_radius: float, tol: float,
+def _body_rings(lower: EndPolygon, upper: EndPolygon, first_id: int, body_radius: float, tol: float,
                 z_lo: float, z_hi: float) -> tuple[NDArray, list]:
-    """The nut's body circles at z_lo and z_hi (vertex ids from ``nv`` on) and the merge strips
-    (A ids, A theta, B ids, B theta) of the two end annuli (end polygon below, circle above:
-    normals -z) and of the body cylinder between the circles. ``P_lo``, ``P_hi``: the
-    end polygons' vertices (right-hand frame)."""
+    """The nut's body circles at z_lo and z_hi (vertex ids from ``first_id`` on) and the merge
+    strips (A ids, A theta, B ids, B theta) of the two end annuli (end polygon below, circle
+    above: normals -z) and of the body cylinder between the circles."""
     two_pi = 2.0 * math.pi
     # body polygon: no step wider than step_max, whose sagitta is tol
     step_max = 2.0 * math.acos(1.0 - tol / body_radius)
     strips, rings = [], []
-    for (P, th), Pv in zip(polys.values(), (P_lo, P_hi)):
-        ang = _ring_angles(th, np.hypot(Pv[:, 0], Pv[:, 1]), step_max)
-        rids = nv + np.arange(len(ang))
-        nv += len(ang)
+    next_id = first_id
+    for poly in (lower, upper):
+        ang = _ring_angles(poly.theta, np.hypot(poly.points[:, 0], poly.points[:, 1]), step_max)
+        rids = next_id + np.arange(len(ang))
+        next_id += len(ang)
         rings.append((rids, ang))
-        rel = (ang - th[0]) % two_pi            # circle vertices from the polygon start on
+        rel = (ang - poly.theta[0]) % two_pi            # circle vertices from the polygon start on
         order = np.argsort(rel, kind="stable")
-        strips.append((*_closed(P, th), *_closed(rids[order], th[0] + rel[order])))
+        strips.append((*_closed(poly.ids, poly.theta), *_closed(rids[order], poly.theta[0] + rel[order])))
     # body cylinder between the two circles (their angles differ where the tops of the
     # falls were added); every triangle spans at most one circle step
     (lo_ids, lo_ang), (hi_ids, hi_ang) = rings
@@ -281,6 +294,355 @@ def _body_rings(polys: dict, P_lo: NDArray, P_hi: NDArray, nv: int, body_radius:
 
 
 # --------------------------------------------------------------------------- builder
+@dataclass(frozen=True)
+class _Strands:
+    """The helices that sweep the thread surface, strand g = 0 .. count - 1: the profile
+    points of :func:`profile_strands` for start 0, then for start 1, and so on.
+
+    Per strand: ``radius`` (mm), ``offset`` u from its tooth mid-plane (mm), ``tooth_mid``
+    (the helix coordinate of that mid-plane at theta = 0, mm) and ``theta_lo``,
+    ``theta_hi``: the angles (rad, right-hand frame) where it meets z_lo and z_hi.
+    """
+
+    radius: NDArray[np.float64]
+    offset: NDArray[np.float64]
+    tooth_mid: NDArray[np.float64]
+    theta_lo: NDArray[np.float64]
+    theta_hi: NDArray[np.float64]
+
+    @property
+    def count(self) -> int:
+        return len(self.radius)
+
+
+def _strands(profile: ThreadProfile, tess: Tessellation, z_lo: float, z_hi: float, first_mid: float,
+             warp: PitchWarp) -> _Strands:
+    """The strands of ``profile`` and their end angles: strand g is the curve
+    z = W(tooth_mid + L theta / 2 pi) + offset at radius r (W: the warp, L: the lead)."""
+    u_period, r_period = profile_strands(profile, tess)
+    per_period = len(u_period)
+    strand = np.arange(profile.starts * per_period)
+    point = strand % per_period
+    offset, radius = u_period[point], r_period[point]
+    tooth_mid = first_mid + (strand // per_period) * profile.pitch
+
+    def theta_at(z_end: float) -> NDArray[np.float64]:
+        return 2.0 * math.pi * (warp.inverse(z_end - offset) - tooth_mid) / profile.lead
+
+    return _Strands(radius=radius, offset=offset, tooth_mid=tooth_mid, theta_lo=theta_at(z_lo),
+                    theta_hi=theta_at(z_hi))
+
+
+@dataclass(frozen=True)
+class _Columns:
+    """The angular sampling of the strands and of the end curves, and the vertex ids it sets.
+
+    Band g lies between strand g and its ``partner`` strand g + 1; the last band's partner
+    is strand 0 one turn on, so ``partner_theta_lo`` / ``partner_theta_hi`` (the partner's
+    end angles in band g's parameter) are shifted by -2 pi there. Columns are the global
+    angles k * ``dtheta`` strictly inside a range, with the sliver margin
+    (:func:`_open_columns`): strand g has columns ``first[g]`` .. ``last[g]``
+    (``count[g]`` >= 0 of them). End curve e (e < n: band e cut by z_lo; e >= n: band e - n
+    cut by z_hi) runs from the partner's end point to strand g's and has columns
+    ``end_first[e]`` on (``end_count[e]``); ``end_start[e]`` is the index of its first
+    vertex among all end-curve vertices.
+
+    Vertex ids: the strand columns (strand g's from ``vertex0[g]`` on), then the strand end
+    points at z_lo, those at z_hi, the end-curve vertices at z_lo, those at z_hi.
+    """
+
+    dtheta: float
+    partner: NDArray[np.int64]
+    partner_theta_lo: NDArray[np.float64]
+    partner_theta_hi: NDArray[np.float64]
+    first: NDArray[np.int64]
+    last: NDArray[np.int64]
+    count: NDArray[np.int64]
+    vertex0: NDArray[np.int64]
+    end_first: NDArray[np.int64]
+    end_count: NDArray[np.int64]
+    end_start: NDArray[np.int64]
+
+    @property
+    def n_strands(self) -> int:
+        return len(self.first)
+
+    @property
+    def n_column_vertices(self) -> int:
+        return int(self.count.sum())
+
+    def end_point_ids(self, upper: bool) -> NDArray[np.int64]:
+        """Vertex ids of the strands' end points at z_lo (``upper`` False) or z_hi."""
+        return self.n_column_vertices + (self.n_strands if upper else 0) + np.arange(self.n_strands)
+
+    def end_curve_vertex0(self) -> NDArray[np.int64]:
+        """Vertex id of every end curve's first vertex."""
+        return self.n_column_vertices + 2 * self.n_strands + self.end_start
+
+
+def _column_sampling(strands: _Strands, dtheta: float) -> _Columns:
+    """The columns of every strand (between its end angles) and of every end curve."""
+    n = strands.count
+    partner = _rolled(np.arange(n), 1)
+    wrap = np.zeros(n)
+    wrap[-1] = -2.0 * math.pi
+    partner_lo, partner_hi = strands.theta_lo[partner] + wrap, strands.theta_hi[partner] + wrap
+    first, last = _open_columns(np.concatenate([strands.theta_lo, partner_lo, partner_hi]),
+                                np.concatenate([strands.theta_hi, strands.theta_lo, strands.theta_hi]), dtheta)
+    span = last[:n] - first[:n] + 1
+    end_count = np.maximum(last[n:] - first[n:] + 1, 0)
+    return _Columns(dtheta=dtheta, partner=partner, partner_theta_lo=partner_lo, partner_theta_hi=partner_hi,
+                    first=first[:n], last=last[:n], count=np.maximum(span, 0), vertex0=np.cumsum(span) - span,
+                    end_first=first[n:], end_count=end_count, end_start=np.cumsum(end_count) - end_count)
+
+
+def _end_points(profile: ThreadProfile, strands: _Strands, cols: _Columns, warp: PitchWarp, z_lo: float,
+                z_hi: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The vertices after the strand columns (right-hand frame, in id order, see
+    :class:`_Columns`): the strand end points at z_lo and z_hi, then the end curves, each a
+    point of the analytic end curve at every column; and the end-curve vertices' angles."""
+    n = strands.count
+    end_theta = _runs(cols.end_first, cols.end_count) * cols.dtheta
+    helix = (np.repeat(np.concatenate([strands.tooth_mid, strands.tooth_mid]), cols.end_count)
+             + profile.lead * end_theta / (2 * math.pi))
+    n_lower = int(cols.end_start[n])
+    z = np.repeat([z_lo, z_hi, z_lo, z_hi], [n, n, n_lower, len(end_theta) - n_lower])
+    u = z[2 * n:] - warp(helix)
+    points = _xyz(np.concatenate([strands.radius, strands.radius, profile.radius_at_offset(u)]),
+                  np.concatenate([strands.theta_lo, strands.theta_hi, end_theta]), z)
+    return points, end_theta
+
+
+@dataclass(frozen=True)
+class EndPolygon:
+    """The cut of the thread surface by an end plane: a closed polygon over exactly one turn.
+
+    ``ids`` (vertex ids), ``theta`` (rad, increasing, spanning less than 2 pi) and
+    ``points`` ((n, 3) mm, right-hand part frame) of its vertices: band after band in
+    decreasing band index, each the partner strand's end point then the band's end curve.
+    """
+
+    ids: NDArray[np.int64]
+    theta: NDArray[np.float64]
+    points: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        if not len(self.ids) == len(self.theta) == len(self.points) or np.shape(self.points)[1:] != (3,):
+            raise ValueError(f"an end polygon needs one theta and one (x, y, z) point per vertex id, got "
+                             f"{len(self.ids)} ids, {len(self.theta)} angles, points {np.shape(self.points)}")
+
+
+def _end_polygons(cols: _Columns, end_theta: NDArray[np.float64],
+                  end_points: NDArray[np.float64]) -> tuple[EndPolygon, EndPolygon]:
+    """The end polygons at z_lo and z_hi; ``end_points``, ``end_theta`` from :func:`_end_points`."""
+    n = cols.n_strands
+    n_cols = cols.n_column_vertices
+    band = np.arange(n)[::-1]
+    curve = np.concatenate([band, n + band])                 # end curves in polygon order
+    cnt = cols.end_count[curve]
+    lead_at = np.cumsum(cnt + 1) - cnt - 1                   # each curve's partner end point
+    rest = _runs(lead_at + 1, cnt)
+    idx = _runs(cols.end_start[curve], cnt)
+    ids = np.empty(len(idx) + 2 * n, np.int64)
+    theta = np.empty(len(idx) + 2 * n)
+    ids[lead_at] = n_cols + (curve >= n) * n + cols.partner[curve % n]
+    theta[lead_at] = np.concatenate([cols.partner_theta_lo, cols.partner_theta_hi])[curve]
+    ids[rest] = n_cols + 2 * n + idx
+    theta[rest] = end_theta[idx]
+    n_lower = int(cols.end_start[n]) + n
+    lower, upper = (ids[:n_lower], theta[:n_lower]), (ids[n_lower:], theta[n_lower:])
+    return tuple(EndPolygon(ids=i, theta=t, points=end_points[i - n_cols]) for i, t in (lower, upper))
+
+
+@dataclass(frozen=True)
+class _BandMiddles:
+    """Per band: the lengths of its chains A and B (:func:`thread_mesh` Notes), its partner
+    strand's first column in the band's parameter, its regular middle (columns
+    ``middle_first`` - 1 .. ``middle_first`` + ``middle_count`` - 1), and the chain indices
+    of column ``middle_first`` - 1 in A and B (no middle: the last vertex of each chain)."""
+
+    len_a: NDArray[np.int64]
+    len_b: NDArray[np.int64]
+    partner_first: NDArray[np.int64]
+    middle_first: NDArray[np.int64]
+    middle_count: NDArray[np.int64]
+    a_at_middle: NDArray[np.int64]
+    b_at_middle: NDArray[np.int64]
+
+
+def _band_middles(cols: _Columns, columns_per_turn: int) -> _BandMiddles:
+    """The chain lengths and regular middles of every band."""
+    n_lower_curve = cols.end_count[:cols.n_strands]
+    len_a = n_lower_curve + cols.count + 3
+    len_b = cols.count[cols.partner] + 1 + cols.end_count[cols.n_strands:]
+    partner_first, partner_last = cols.first[cols.partner], cols.last[cols.partner]
+    partner_first[-1] -= columns_per_turn
+    partner_last[-1] -= columns_per_turn
+    middle_first = np.maximum(cols.first, partner_first) + 1
+    middle_count = np.maximum(np.minimum(cols.last, partner_last) - middle_first + 1, 0)
+    has_middle = middle_count > 0
+    # A: after the partner's end point at z_lo, the lower end curve and strand g's end point
+    a_at_middle = np.where(has_middle, n_lower_curve + 2 + (middle_first - 1 - cols.first), len_a - 1)
+    b_at_middle = np.where(has_middle, middle_first - 1 - partner_first, len_b - 1)
+    return _BandMiddles(len_a=len_a, len_b=len_b, partner_first=partner_first, middle_first=middle_first,
+                        middle_count=middle_count, a_at_middle=a_at_middle, b_at_middle=b_at_middle)
+
+
+def _piece_lengths(mid: _BandMiddles, chain_len: NDArray[np.int64],
+                   at_middle: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Lengths of a chain's pieces outside the middles (strip 2 g: the prefix up to column
+    ``middle_first`` - 1, strip 2 g + 1: the suffix from the middle's last column on, empty
+    without a middle) and the chain index each piece starts at."""
+    after = at_middle + mid.middle_count
+    length = np.column_stack([at_middle + 1, np.where(mid.middle_count > 0, chain_len - after, 0)]).ravel()
+    start = np.column_stack([np.zeros_like(after), after]).ravel()
+    return length, start
+
+
+def _chain_a_pieces(strands: _Strands, cols: _Columns,
+                    mid: _BandMiddles) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
+    """Vertex ids, angles and piece lengths of chain A's pieces: partner end point at z_lo |
+    lower end curve | strand g's end point at z_lo | strand g's columns | its end point at z_hi."""
+    n = cols.n_strands
+    length, start = _piece_lengths(mid, mid.len_a, mid.a_at_middle)
+    i, owner = _ranges(start, length)
+    band = owner >> 1
+    n_curve = cols.end_count[:n]
+    curve_len = n_curve[band]
+    segment = ((i > 0).astype(np.int64) + (i > curve_len) + (i > curve_len + 1)
+               + (i > curve_len + 1 + cols.count[band]))
+    key = segment * n + band
+    lo_ids, hi_ids = cols.end_point_ids(False), cols.end_point_ids(True)
+    zero = np.zeros(n, np.int64)
+    ids = np.concatenate([lo_ids[cols.partner], cols.end_curve_vertex0()[:n] - 1, lo_ids,
+                          cols.vertex0 - n_curve - 2, hi_ids])[key]
+    col = np.concatenate([zero, cols.end_first[:n] - 1, zero, cols.first - n_curve - 2, zero])[key] + i
+    ranged = (segment == 1) | (segment == 3)
+    ids[ranged] += i[ranged]
+    theta = np.where(ranged, col * cols.dtheta,
+                     np.concatenate([cols.partner_theta_lo, strands.theta_lo, strands.theta_lo, strands.theta_lo,
+                                     strands.theta_hi])[key])
+    return ids, theta, length
+
+
+def _chain_b_pieces(cols: _Columns,
+                    mid: _BandMiddles) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]:
+    """Vertex ids, angles and piece lengths of chain B's pieces: the partner's columns |
+    its end point at z_hi | upper end curve."""
+    n = cols.n_strands
+    length, start = _piece_lengths(mid, mid.len_b, mid.b_at_middle)
+    j, owner = _ranges(start, length)
+    band = owner >> 1
+    partner_count = cols.count[cols.partner]
+    columns_len = partner_count[band]
+    segment = (j >= columns_len).astype(np.int64) + (j > columns_len)
+    key = segment * n + band
+    ids = np.concatenate([cols.vertex0[cols.partner], cols.end_point_ids(True)[cols.partner],
+                          cols.end_curve_vertex0()[n:] - partner_count - 1])[key]
+    col = np.concatenate([mid.partner_first, np.zeros(n, np.int64),
+                          cols.end_first[n:] - partner_count - 1])[key] + j
+    ranged = segment != 1
+    ids[ranged] += j[ranged]
+    theta = np.where(ranged, col * cols.dtheta, cols.partner_theta_hi[band])
+    return ids, theta, length
+
+
+@dataclass(frozen=True)
+class _Bands:
+    """The triangle rows of the thread bands (:func:`thread_mesh` Notes).
+
+    Band g owns rows ``row0[g]`` .. ``row0[g] + rows[g] - 1`` (all bands: one block from
+    row 0); its regular middle starts at row ``middle_row0[g]`` with the quad on strand
+    columns ``middle_a[g]``, ``middle_b[g]`` (:func:`_band_rows`). ``irregular_rows`` are
+    the other rows, in the order :func:`_merge_flat` emits the triangles of the chain
+    pieces ``a_*``, ``b_*`` (strip 2 g: band g's prefixes, 2 g + 1: its suffixes).
+    """
+
+    row0: NDArray[np.int64]
+    rows: NDArray[np.int64]
+    middle_row0: NDArray[np.int64]
+    middle_a: NDArray[np.int64]
+    middle_b: NDArray[np.int64]
+    irregular_rows: NDArray[np.int64]
+    a_ids: NDArray[np.int64]
+    a_theta: NDArray[np.float64]
+    a_len: NDArray[np.int64]
+    b_ids: NDArray[np.int64]
+    b_theta: NDArray[np.float64]
+    b_len: NDArray[np.int64]
+
+    @property
+    def n_rows(self) -> int:
+        return int(self.rows.sum())
+
+    def irregular_triangles(self) -> NDArray[np.int64]:
+        """The triangles of ``irregular_rows`` (right-hand winding as merged)."""
+        return _merge_flat(self.a_ids, self.a_theta, self.a_len, self.b_ids, self.b_theta, self.b_len)
+
+
+def _band_chains(strands: _Strands, cols: _Columns, columns_per_turn: int) -> _Bands:
+    """Every band's chains joined into triangle rows: the regular middles written
+    arithmetically, the pieces next to the end planes to be merged."""
+    mid = _band_middles(cols, columns_per_turn)
+    a_ids, a_theta, a_len = _chain_a_pieces(strands, cols, mid)
+    b_ids, b_theta, b_len = _chain_b_pieces(cols, mid)
+    rows = mid.len_a + mid.len_b - 2
+    row0 = np.cumsum(rows) - rows
+    n_prefix = mid.a_at_middle + mid.b_at_middle
+    n_suffix = rows - n_prefix - 2 * mid.middle_count
+    irregular = _runs(np.column_stack([row0, row0 + n_prefix + 2 * mid.middle_count]).ravel(),
+                      np.column_stack([n_prefix, n_suffix]).ravel())
+    middle_a = cols.vertex0 + mid.middle_first - 1 - cols.first               # strand g's column before the middle
+    middle_b = cols.vertex0[cols.partner] + mid.middle_first - 1 - mid.partner_first
+    return _Bands(row0=row0, rows=rows, middle_row0=row0 + n_prefix, middle_a=middle_a, middle_b=middle_b,
+                  irregular_rows=irregular, a_ids=a_ids, a_theta=a_theta, a_len=a_len, b_ids=b_ids,
+                  b_theta=b_theta, b_len=b_len)
+
+
+def _end_faces(lower: EndPolygon, upper: EndPolygon, first_id: int, z_lo: float, z_hi: float,
+               body_radius: float | None, tol: float) -> tuple[NDArray[np.float64], list[tuple[NDArray, int]]]:
+    """Close the thread surface at the end planes z = z_lo and z = z_hi.
+
+    Parameters
+    ----------
+    lower, upper : EndPolygon
+        The thread surface's cuts by z_lo and z_hi (right-hand frame); their edges are
+        edges of the thread surface, so the end faces must use exactly these edges.
+    first_id : int
+        The id of the first vertex this function adds.
+    z_lo, z_hi : float
+        The end planes (mm).
+    body_radius : float or None
+        None for an external thread (screw, roller): each end face is a fan from a vertex
+        on the axis. Else (nut) the outer body radius (mm): each end face is the annulus
+        between the polygon and a body circle, and the body cylinder joins the circles,
+        its polygon within ``tol`` (mm) of the cylinder.
+
+    Returns
+    -------
+    vertices : NDArray
+        (k, 3) the added vertices (mm, right-hand part frame), ids ``first_id`` on.
+    faces : list of (NDArray, int)
+        (m, 3) vertex-id triangles with their face kind: FACE_END_LO (normals -z),
+        FACE_END_HI (normals +z) and, for the nut, FACE_BODY (normals outward), wound
+        for those normals in the right-hand frame.
+    """
+    if body_radius is None:
+        fans = []
+        for poly, centre in ((lower, first_id), (upper, first_id + 1)):   # axis points at z_lo, z_hi
+            nxt = _rolled(poly.ids, 1)
+            fan = np.empty((len(poly.ids), 3), np.int64)
+            fan[:, 0] = centre
+            fan[:, 1], fan[:, 2] = (nxt, poly.ids) if poly is lower else (poly.ids, nxt)
+            fans.append(fan)
+        return np.array([[0.0, 0.0, z_lo], [0.0, 0.0, z_hi]]), [(fans[0], FACE_END_LO), (fans[1], FACE_END_HI)]
+    circles, strips = _body_rings(lower, upper, first_id, body_radius, tol, z_lo, z_hi)
+    tri = merge_strips(*(list(x) for x in zip(*strips)))
+    at = np.cumsum([0] + [len(a) + len(b) - 2 for a, _, b, _ in strips])
+    return circles, [(tri[at[0]:at[1]], FACE_END_LO), (tri[at[1]:at[2], [0, 2, 1]], FACE_END_HI),
+                     (tri[at[2]:], FACE_BODY)]
+
+
 def thread_mesh(profile: ThreadProfile, z_lo: float, z_hi: float, tol: float,
                 first_mid: float = 0.0, warp: PitchWarp | None = None,
                 body_radius: float | None = None) -> ThreadMesh:
@@ -316,211 +678,93 @@ def thread_mesh(profile: ThreadProfile, z_lo: float, z_hi: float, tol: float,
       index only, so they are evaluated once per column (tables over the column range) and
       gathered per strand; every value is the float64 result of the same operations as
       evaluating it per vertex (theta = column * dtheta).
-    * Band triangles: band g merges chain A (strand h's end point at z_lo, the end curve at
-      z_lo, strand g's end point, its columns, its end point at z_hi) with chain B (strand
-      h = g + 1's columns, its end point at z_hi, the end curve at z_hi) in theta, A first
-      at equal theta. Within each chain the events (vertices after the first) increase in
-      theta: the columns keep the sliver margin from the end points of their own strand
-      and end curve. So where both strands have columns k - 1 .. K1 (the middle, from
-      K0 = max(first columns) + 1), the merge takes A_k, B_k, A_k+1, ... (equal thetas
-      k * dtheta, A first) and emits the quads (a_k-1, a_k, b_k, b_k-1) as two triangles
-      each: written arithmetically (:func:`_band_rows`). The chain pieces before and after
-      the middle (about one turn of columns over all bands, next to the end planes) are
-      merged in one vectorised call.
-        """
+    * Band triangles: band g merges chain A (the partner strand h = g + 1's end point at
+      z_lo, the end curve at z_lo, strand g's end point, its columns, its end point at z_hi)
+      with chain B (strand h's columns, its end point at z_hi, the end curve at z_hi) in
+      theta, A first at equal theta. Within each chain the events (vertices after the
+      first) increase in theta: the columns keep the sliver margin from the end points of
+      their own strand and end curve. So where both strands have columns k - 1 .. k_last
+      (the middle, from k_first = max(first columns) + 1), the merge takes A_k, B_k,
+      A_k+1, ... (equal thetas k * dtheta, A first) and emits the quads (a_k-1, a_k, b_k,
+      b_k-1) as two triangles each: written arithmetically (:func:`_band_rows`). The chain
+      pieces before and after the middle (about one turn of columns over all bands, next
+      to the end planes) are merged in one vectorised call.
+    * End faces: :func:`_end_faces` closes the end polygons.
+    """
     warp = warp or identity_warp(profile.pitch)
     if profile.internal and body_radius is None:
         raise ValueError("an internal thread needs body_radius")
     tess = choose_tessellation(profile, tol)
-    dth = tess.dtheta
-    ncol = tess.columns_per_turn
-    L, p = profile.lead, profile.pitch
-    u_s, r_s = profile_strands(profile, tess)
-    M = len(u_s)
-    G = profile.starts * M
-    g = np.arange(G)
-    strand_point = g % M
-    u_g, r_g = u_s[strand_point], r_s[strand_point]
-    base_g = first_mid + (g // M) * p   # helix coordinate of strand g's tooth at theta = 0
-
-    def theta_at(z_e: float) -> NDArray:
-        m = warp.inverse(z_e - u_g)
-        return 2.0 * math.pi * (m - base_g) / L
-
-    th_lo, th_hi = theta_at(z_lo), theta_at(z_hi)
-    # bands (g, h): h = g + 1, the last band wraps to strand 0 one turn on
-    h = _rolled(g, 1)
-    wrap = np.zeros(G)
-    wrap[-1] = -2.0 * math.pi                       # theta offset of strand h in band param
-    th_lo_h, th_hi_h = th_lo[h] + wrap, th_hi[h] + wrap
-    # columns strictly inside: each strand's theta range, then each band's end curve at z_lo
-    # and at z_hi (end e: band e % G, from strand h's end point to strand g's)
-    th_from, th_to = np.concatenate([th_lo_h, th_hi_h]), np.concatenate([th_lo, th_hi])
-    first_col, last_col = _open_columns(np.concatenate([th_lo, th_from]), np.concatenate([th_hi, th_to]), dth)
-    c0, c1 = first_col[:G], last_col[:G]
-    n_strand_cols = c1 - c0 + 1
-    n_g = np.maximum(n_strand_cols, 0)
-    strand_base = np.cumsum(n_strand_cols) - n_strand_cols   # id of strand g's first column vertex
-    nv_cols = int(n_g.sum())
-    b0 = first_col[G:]
-    n_end = np.maximum(last_col[G:] - b0 + 1, 0)
-    end_split = np.cumsum(n_end) - n_end
-
-    # --- small vertex sets (right-hand frame), after the strand columns: the strand end
-    # points at z_lo (ids e_lo), at z_hi (e_hi), then the end curves at z_lo, then at z_hi
-    e_lo, e_hi = nv_cols + g, nv_cols + G + g
-    ecol = _runs(b0, n_end)
-    eth = ecol * dth
-    m = np.repeat(np.concatenate([base_g, base_g]), n_end) + L * eth / (2 * math.pi)
-    n_lo = int(end_split[G])                        # end-curve vertices at z_lo
-    z_small = np.repeat([z_lo, z_hi, z_lo, z_hi], [G, G, n_lo, len(ecol) - n_lo])
-    u_star = z_small[2 * G:] - warp(m)
-    V_small = _xyz(np.concatenate([r_g, r_g, profile.radius_at_offset(u_star)]),
-                   np.concatenate([th_lo, th_hi, eth]), z_small)
-    end_id0 = nv_cols + 2 * G + end_split          # first vertex id of each end curve
-    nv = nv_cols + len(V_small)
-
-    # --- end polygons, theta increasing over exactly one turn: bands in decreasing g, each
-    # strand h's end point then the band's end curve; the lower polygon, then the upper
-    seq = np.concatenate([g[::-1], G + g[::-1]])
-    cnt = n_end[seq]
-    at = np.cumsum(cnt + 1) - cnt - 1
-    rest = _runs(at + 1, cnt)
-    idx = _runs(end_split[seq], cnt)
-    poly_ids = np.empty(len(idx) + 2 * G, np.int64)
-    poly_th = np.empty(len(idx) + 2 * G)
-    poly_ids[at] = nv_cols + (seq >= G) * G + h[seq % G]
-    poly_th[at] = th_from[seq]
-    poly_ids[rest] = nv_cols + 2 * G + idx
-    poly_th[rest] = eth[idx]
-    n_lo += G
-    polys = {"lo": (poly_ids[:n_lo], poly_th[:n_lo]), "hi": (poly_ids[n_lo:], poly_th[n_lo:])}
-
-    # --- band chains and their regular middles (see Notes)
-    nlo = n_end[:G]
-    nh = n_g[h]
-    nA = nlo + n_g + 3
-    nB = nh + 1 + n_end[G:]
-    c0h, c1h = c0[h], c1[h]                          # strand h's columns in band param
-    c0h[-1] -= ncol
-    c1h[-1] -= ncol
-    K0 = np.maximum(c0, c0h) + 1                     # middle: columns K0 .. K1
-    K1 = np.minimum(c1, c1h)
-    nreg = np.maximum(K1 - K0 + 1, 0)
-    has = nreg > 0
-    # chain indices of column K0 - 1 (A: after e_lo[h], the end curve and e_lo[g]; B: first),
-    # the state before the middle, and of K1 after it; no middle: the whole chains merge
-    ia0 = np.where(has, nlo + 2 + (K0 - 1 - c0), nA - 1)
-    ib0 = np.where(has, K0 - 1 - c0h, nB - 1)
-    ia1, ib1 = ia0 + nreg, ib0 + nreg
-    n_tri = nA + nB - 2
-    row0 = np.cumsum(n_tri) - n_tri
-    n_pre = ia0 + ib0
-    n_suf = n_tri - n_pre - 2 * nreg
-    T = int(n_tri.sum())
-
-    # the pieces before and after the middles: strips 2 g (chain prefixes), 2 g + 1 (suffixes)
-    la = np.column_stack([ia0 + 1, np.where(has, nA - ia1, 0)]).ravel()
-    lb = np.column_stack([ib0 + 1, np.where(has, nB - ib1, 0)]).ravel()
-    zero = np.zeros(G, np.int64)
-    i, own = _ranges(np.column_stack([zero, ia1]).ravel(), la)
-    bd = own >> 1
-    lo_n = nlo[bd]
-    # chain A: e_lo[h] | lower end curve | e_lo[g] | strand g's columns | e_hi[g]
-    seg = (i > 0).astype(np.int64) + (i > lo_n) + (i > lo_n + 1) + (i > lo_n + 1 + n_g[bd])
-    key = seg * G + bd
-    A_ids = np.concatenate([e_lo[h], end_id0[:G] - 1, e_lo, strand_base - nlo - 2, e_hi])[key]
-    A_col = np.concatenate([zero, b0[:G] - 1, zero, c0 - nlo - 2, zero])[key] + i
-    ranged = (seg == 1) | (seg == 3)
-    A_ids[ranged] += i[ranged]
-    A_th = np.where(ranged, A_col * dth, np.concatenate([th_lo_h, th_lo, th_lo, th_lo, th_hi])[key])
-    # chain B: strand h's columns | e_hi[h] | upper end curve
-    j, own = _ranges(np.column_stack([zero, ib1]).ravel(), lb)
-    bd = own >> 1
-    nh_j = nh[bd]
-    seg = (j >= nh_j).astype(np.int64) + (j > nh_j)
-    key = seg * G + bd
-    B_ids = np.concatenate([strand_base[h], e_hi[h], end_id0[G:] - nh - 1])[key]
-    B_col = np.concatenate([c0h, zero, b0[G:] - nh - 1])[key] + j
-    ranged = seg != 1
-    B_ids[ranged] += j[ranged]
-    B_th = np.where(ranged, B_col * dth, th_hi_h[bd])
-    irr_rows = _runs(np.column_stack([row0, row0 + n_pre + 2 * nreg]).ravel(),
-                     np.column_stack([n_pre, n_suf]).ravel())
-
-    # --- end faces (right-hand orientation): fans from the axis, or (nut) annuli to the body
-    # circles and the body cylinder, merged with the band pieces above in one call
-    if not profile.internal:
-        extra = np.array([[0.0, 0.0, z_lo], [0.0, 0.0, z_hi]])
-        end_faces = []
-        for (P, _), centre in zip(polys.values(), (nv, nv + 1)):   # axis points at z_lo, z_hi
-            Pn = _rolled(P, 1)
-            fan = np.empty((len(P), 3), np.int64)
-            fan[:, 0] = centre
-            fan[:, 1], fan[:, 2] = (Pn, P) if centre == nv else (P, Pn)   # normals -z at z_lo
-            end_faces.append(fan)
-        end_kinds = [FACE_END_LO, FACE_END_HI]
-        tri = _merge_flat(A_ids, A_th, la, B_ids, B_th, lb)
-    else:
-        extra, strips = _body_rings(polys, V_small[polys["lo"][0] - nv_cols], V_small[polys["hi"][0] - nv_cols],
-                                    nv, body_radius, tol, z_lo, z_hi)
-        A_l, Ath_l, B_l, Bth_l = zip(*strips)
-        tri = _merge_flat(np.concatenate([A_ids, *A_l]), np.concatenate([A_th, *Ath_l]),
-                          np.concatenate([la, [len(x) for x in A_l]]),
-                          np.concatenate([B_ids, *B_l]), np.concatenate([B_th, *Bth_l]),
-                          np.concatenate([lb, [len(x) for x in B_l]]))
-        at = np.cumsum([len(irr_rows)] + [len(x) + len(y) - 2 for x, _, y, _ in strips])
-        end_faces = [tri[at[0]:at[1]], tri[at[1]:at[2], [0, 2, 1]], tri[at[2]:]]   # z_hi: normals +z
-        end_kinds = [FACE_END_LO, FACE_END_HI, FACE_BODY]
-    n_irr = len(irr_rows)
-
-    # --- vertices: strand columns (bulk), then the small sets, in the part's hand
+    strands = _strands(profile, tess, z_lo, z_hi, first_mid, warp)
+    cols = _column_sampling(strands, tess.dtheta)
+    end_points, end_theta = _end_points(profile, strands, cols, warp, z_lo, z_hi)
+    lower, upper = _end_polygons(cols, end_theta, end_points)
+    bands = _band_chains(strands, cols, tess.columns_per_turn)
+    added, end_faces = _end_faces(lower, upper, cols.n_column_vertices + len(end_points), z_lo, z_hi,
+                                  body_radius if profile.internal else None, tol)
     left = profile.hand_sign < 0
-    vertices = np.empty((nv + len(extra), 3))
-    tail = vertices[nv_cols:]
-    tail[:len(V_small)] = V_small
-    tail[len(V_small):] = extra
+    vertices = _vertices(profile, strands, cols, warp, np.concatenate([end_points, added]), left)
+    faces, kind = _faces(bands, end_faces, flip_thread=bool(profile.internal) != left, left=left)
+    return ThreadMesh(part=profile.part, vertices=vertices, faces=faces, face_kind=kind, profile=profile,
+                      warp=warp, first_mid=first_mid, z_lo=z_lo, z_hi=z_hi, chord_tolerance=tol,
+                      body_radius=body_radius,
+                      meta={"columns_per_turn": tess.columns_per_turn, "strands": strands.count,
+                            "flank_segments": len(tess.flank_radii) - 1})
+
+
+def _vertices(profile: ThreadProfile, strands: _Strands, cols: _Columns, warp: PitchWarp,
+              after_columns: NDArray[np.float64], left: bool) -> NDArray[np.float64]:
+    """All vertices in the part's hand: the strand columns (bulk), then ``after_columns``
+    (right-hand frame), y negated for a left hand."""
+    n_cols = cols.n_column_vertices
+    vertices = np.empty((n_cols + len(after_columns), 3))
+    tail = vertices[n_cols:]
+    tail[:] = after_columns
     if left:
         tail *= np.array([1.0, -1.0, 1.0])
-    if nv_cols:
-        _strand_column_vertices(vertices[:nv_cols], c0, n_g, r_g, base_g, u_g, dth, L, warp, left)
-
-    # --- faces: thread bands (bulk), then the end faces, in the part's hand
-    flip_thread = bool(profile.internal) != left      # the nut's material is outside: normals inward
-    n_end_faces = sum(len(f) for f in end_faces)
-    faces = np.empty((T + n_end_faces, 3), np.int64)
-    kind = np.empty(T + n_end_faces, np.int8)
-    kind[:T] = FACE_THREAD
-    q_a = strand_base + K0 - 1 - c0          # a_{K0 - 1}: strand g's column before the middle
-    q_b = strand_base[h] + K0 - 1 - c0h      # b_{K0 - 1}
-    _band_rows(faces, row0, n_tri, row0 + n_pre, q_a, q_b, flip_thread)
-    faces[irr_rows] = tri[:n_irr, [0, 2, 1]] if flip_thread else tri[:n_irr]
-    f0 = T
-    for f, kd in zip(end_faces, end_kinds):
-        faces[f0:f0 + len(f)] = f[:, [0, 2, 1]] if left else f
-        kind[f0:f0 + len(f)] = kd
-        f0 += len(f)
-    return ThreadMesh(profile.part, vertices, faces, kind, profile, warp, first_mid, z_lo, z_hi,
-                      tol, body_radius, meta={"columns_per_turn": ncol, "strands": G,
-                                              "flank_segments": len(tess.flank_radii) - 1})
+    if n_cols:
+        _strand_column_vertices(vertices[:n_cols], strands, cols, profile.lead, warp, left)
+    return vertices
 
 
-def _strand_column_vertices(out: NDArray, c0: NDArray, n_g: NDArray, r_g: NDArray, base_g: NDArray,
-                            u_g: NDArray, dth: float, L: float, warp: PitchWarp, left: bool) -> None:
-    """Vertices of strand g at columns c0[g] .. c0[g] + n_g[g] - 1, strand after strand, into
-    ``out``: (r cos theta, r sin theta, W(base + L theta / 2 pi) + u) at theta = column * dth,
-    y negated for a left hand.
+def _faces(bands: _Bands, end_faces: list[tuple[NDArray, int]], flip_thread: bool,
+           left: bool) -> tuple[NDArray[np.int64], NDArray[np.int8]]:
+    """Faces and face kinds in the part's hand: the thread bands (bulk, reversed when
+    ``flip_thread``: the nut's material is outside), then the end faces (reversed for a
+    left hand)."""
+    n_rows = bands.n_rows
+    n_end_faces = sum(len(f) for f, _ in end_faces)
+    faces = np.empty((n_rows + n_end_faces, 3), np.int64)
+    kind = np.empty(n_rows + n_end_faces, np.int8)
+    kind[:n_rows] = FACE_THREAD
+    _band_rows(faces, bands.row0, bands.rows, bands.middle_row0, bands.middle_a, bands.middle_b, flip_thread)
+    irregular = bands.irregular_triangles()
+    faces[bands.irregular_rows] = irregular[:, [0, 2, 1]] if flip_thread else irregular
+    row = n_rows
+    for f, face_kind in end_faces:
+        faces[row:row + len(f)] = f[:, [0, 2, 1]] if left else f
+        kind[row:row + len(f)] = face_kind
+        row += len(f)
+    return faces, kind
+
+
+def _strand_column_vertices(out: NDArray, strands: _Strands, cols: _Columns, lead: float, warp: PitchWarp,
+                            left: bool) -> None:
+    """Vertices of strand g at columns ``cols.first[g]`` on (``cols.count[g]``), strand after
+    strand, into ``out``: (r cos theta, r sin theta, W(tooth_mid + L theta / 2 pi) + u) at
+    theta = column * dtheta, y negated for a left hand.
 
     cos, sin and the helix advance L theta / 2 pi depend on the column only: they are
     tabulated over the column range and gathered (the same float64 values as computing
     them per vertex). Few and reused temporaries: memory traffic is what this costs."""
-    live = n_g > 0
-    cmin = int(c0[live].min())
-    cmax = int((c0 + n_g - 1)[live].max())
-    th_tab = np.arange(cmin, cmax + 1) * dth
-    col = _runs(c0 - cmin, n_g)                   # column index into the tables, per vertex
+    first, count = cols.first, cols.count
+    live = count > 0
+    cmin = int(first[live].min())
+    cmax = int((first + count - 1)[live].max())
+    th_tab = np.arange(cmin, cmax + 1) * cols.dtheta
+    col = _runs(first - cmin, count)              # column index into the tables, per vertex
     x, y, z = out[:, 0], out[:, 1], out[:, 2]
-    r = np.repeat(r_g, n_g)
+    r = np.repeat(strands.radius, count)
     buf = np.take(np.cos(th_tab), col, mode="clip")   # in range; "clip" only skips a buffer
     np.multiply(r, buf, out=x)
     np.take(np.sin(th_tab), col, out=buf, mode="clip")
@@ -528,14 +772,14 @@ def _strand_column_vertices(out: NDArray, c0: NDArray, n_g: NDArray, r_g: NDArra
     if left:
         np.negative(y, out=y)                     # (r sin) * -1, bit for bit
     del r
-    np.take(L * th_tab / (2 * math.pi), col, out=buf, mode="clip")
+    np.take(lead * th_tab / (2 * math.pi), col, out=buf, mode="clip")
     del col
-    m = np.add(np.repeat(base_g, n_g), buf, out=buf)
+    m = np.add(np.repeat(strands.tooth_mid, count), buf, out=buf)
     if isinstance(warp, PitchWarp) and warp.is_identity:
         # W(m) + u = (m + 0.0) + u, bit for bit m + (u + 0.0)
-        np.add(m, np.repeat(u_g + 0.0, n_g), out=z)
+        np.add(m, np.repeat(strands.offset + 0.0, count), out=z)
     else:
-        np.add(warp(m), np.repeat(u_g, n_g), out=z)
+        np.add(warp(m), np.repeat(strands.offset, count), out=z)
 
 
 def _band_rows(faces: NDArray[np.int64], row0: NDArray, n_rows: NDArray, first: NDArray, a: NDArray,
@@ -611,8 +855,7 @@ def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
     from_part = np.asarray(out.run_original_id)[run_of_face] == part_id
     kind = np.full(len(F), FACE_MARK, np.int8)
     kind[from_part] = tm.face_kind[np.asarray(out.face_id, dtype=np.int64)[from_part]]
-    return ThreadMesh(tm.part, V, F, kind, tm.profile, tm.warp, tm.first_mid, tm.z_lo, tm.z_hi,
-                      tm.chord_tolerance, tm.body_radius, meta=dict(tm.meta), datum_mark=mark)
+    return dataclasses.replace(tm, vertices=V, faces=F, face_kind=kind, meta=dict(tm.meta), datum_mark=mark)
 
 
 # --------------------------------------------------------------------------- checking
