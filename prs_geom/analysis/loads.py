@@ -40,9 +40,9 @@ Compliances
 * Hertz point contact of the roller's spherical flank (radius r_T) with the screw's or
   nut's straight flank, curvatures 1/r_T, 1/r_T and 0, +-sin(beta)/r_c at the actual contact
   radius r_c of the contact solver; ellipticity k from the complete elliptic integrals
-  (scipy); normal approach delta = C Q^(2/3); the axial load is F = Q n_z, with n_z the axial
-  component of the contact normal from the contact solver (about cos(beta) cos(lambda)), so
-  the axial approach is C (F / n_z)^(2/3) / n_z.
+  (:mod:`prs_geom.analysis.hertz`); normal approach delta = C Q^(2/3); the axial load is
+  F = Q n_z, with n_z the axial component of the contact normal from the contact solver
+  (about cos(beta) cos(lambda)), so the axial approach is C (F / n_z)^(2/3) / n_z.
 * Thread teeth (Yamamoto, Appendix A): bending, shear, root tilt, root shear and radial
   terms. Yamamoto's terms are per unit circumferential width; ``design.loads.tooth_width``
   says which width one contact load acts over (:class:`~prs_geom.model.design.LoadSettings`).
@@ -69,9 +69,9 @@ from typing import Any, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import optimize, special
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.analysis.hertz import hertz_contact
 from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, LoadResult, RollerLoadResult,
                                            block_compliance, chunk_size, iteration_bound, solve_loads, solve_loads_batch,
                                            solve_loads_rollers)
@@ -84,49 +84,26 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
            "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
-           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
+           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
            "check_load_scale"]
 
 
 # --------------------------------------------------------------------------- Hertz
-def ellipticity(F_rho: float) -> float:
-    """k >= 1 with F(rho) = [(k^2 + 1) E(e) - 2 K(e)] / [(k^2 - 1) E(e)], e^2 = 1 - 1/k^2."""
-    if F_rho <= 1e-12:
-        return 1.0
-
-    def f(k: float) -> float:
-        m = 1.0 - 1.0 / (k * k)
-        E, K = special.ellipe(m), special.ellipk(m)
-        return ((k * k + 1.0) * E - 2.0 * K) / ((k * k - 1.0) * E) - F_rho
-
-    return optimize.brentq(f, 1.0 + 1e-9, 1e4, xtol=1e-14, rtol=1e-15)
-
-
 def hertz_constant(curvatures: Sequence[float], eta: float) -> tuple[float, dict[str, float]]:
     """C with normal approach delta = C Q^(2/3) (mm, Q in N) for principal curvatures
-    (rho11, rho12, rho21, rho22) (1/mm) and eta = sum (1 - nu^2)/E (1/MPa)."""
+    (rho11, rho12, rho21, rho22) (1/mm; plane 2 is the circumferential direction) and
+    eta = sum (1 - nu^2)/E (1/MPa), with the ellipse constants of
+    :func:`prs_geom.analysis.hertz.hertz_contact` (semi-axes per Q^(1/3), mm N^(-1/3))."""
     r11, r12, r21, r22 = curvatures
-    sum_rho = r11 + r12 + r21 + r22
-    if sum_rho <= 0:
+    if r11 + r12 + r21 + r22 <= 0:
         raise DesignError("roller.arc_radius_mm", None, "the contact curvature sum must be positive")
-    F_rho = (abs(r11 - r12) + abs(r21 - r22)) / sum_rho
-    k = ellipticity(F_rho)
-    m = 1.0 - 1.0 / (k * k)
-    E, K = float(special.ellipe(m)), float(special.ellipk(m))
-    C = (2.0 * K / math.pi) * (math.pi / (2.0 * k * k * E)) ** (1.0 / 3.0) \
-        * (3.0 * eta / (2.0 * sum_rho)) ** (2.0 / 3.0) * sum_rho / 2.0
-    # semi-axes per Q^(1/3): a = (2 k^2 E / pi)^(1/3) (3 Q eta / (2 sum_rho))^(1/3) lies in the
-    # principal plane of the smaller curvature sum, b = (2 E / (pi k))^(1/3) (...) in the other
-    base = (3.0 * eta / (2.0 * sum_rho)) ** (1.0 / 3.0)
-    a_coef = (2.0 * k * k * E / math.pi) ** (1.0 / 3.0) * base
-    b_coef = (2.0 * E / (math.pi * k)) ** (1.0 / 3.0) * base
-    # plane 2 (rho12 + rho22) is the circumferential direction of the callers' curvature order
-    circ = b_coef if r12 + r22 >= r11 + r21 else a_coef
-    return C, {"sum_rho_per_mm": sum_rho, "F_rho": F_rho, "ellipticity_k": k,
-               "semi_major_per_cbrt_N_mm": a_coef, "semi_minor_per_cbrt_N_mm": b_coef,
-               "circumferential_semi_axis_per_cbrt_N_mm": circ}
+    c = hertz_contact(curvatures, eta)
+    return c.approach_constant, {"sum_rho_per_mm": c.curvature_sum_per_mm, "F_rho": c.curvature_difference,
+                                 "ellipticity_k": c.ellipticity, "semi_major_per_cbrt_N_mm": c.semi_major_per_cbrt_n,
+                                 "semi_minor_per_cbrt_N_mm": c.semi_minor_per_cbrt_n,
+                                 "circumferential_semi_axis_per_cbrt_N_mm": c.plane_2_semi_axis_per_cbrt_n}
 
 
 # --------------------------------------------------------------------------- Yamamoto
