@@ -75,7 +75,7 @@ from prs_geom.analysis.hertz import hertz_contact
 from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, LoadResult, RollerLoadResult,
                                            block_compliance, chunk_size, iteration_bound, solve_loads, solve_loads_batch,
                                            solve_loads_rollers)
-from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
 from prs_geom.progress import ProgressFn
@@ -87,7 +87,7 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
-           "check_load_scale"]
+           "check_load_scale", "MODEL_RISK_NOT_COMPUTED", "design_pitch"]
 
 
 # --------------------------------------------------------------------------- Hertz
@@ -195,6 +195,35 @@ def check_load_scale(design: PRSDesign, model: LoadModel | None = None, load_n: 
     raise DesignError(field, shown, why)
 
 
+def _tooth_compliance(design: PRSDesign, part: str, r_c: float, width: float,
+                      profile: ThreadProfile) -> tuple[float, dict[str, float]]:
+    """Yamamoto compliance (mm/N, axial) of the ``part`` tooth loaded at radius ``r_c`` (mm)
+    over circumferential ``width`` (mm), and its terms: tooth thickness b at the contact
+    radius, root distance c, root thickness a (mm), the width and each term per width."""
+    beta, p, mats = design.thread.beta, design.thread.pitch_mm, design.materials
+    b = 2.0 * float(profile.tooth_half_width(r_c))
+    c = abs(r_c - profile.root_radius)
+    a = b + 2.0 * c * math.tan(beta)
+    if not 0.0 < b <= a < 2.0 * p:
+        # Yamamoto's terms take log(a / b) and log(P - a / 2), out of their domain when the
+        # contact lies off the tooth: the roller's flank arc touches a straight flank at a
+        # roller radius of about r_T sin(beta), so the arc radius moves it
+        r_t = design.roller.arc_radius_mm
+        raise DesignError("roller.arc_radius_mm", r_t,
+                          f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
+                          f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
+                          f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
+                          f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
+                          f"roller.arc_radius_mm nearer r_r / sin(beta) = "
+                          f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
+    mat = getattr(mats, part)
+    terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
+                                mat.poisson_ratio,
+                                design.nut.outer_diameter_mm if part == "nut" else None)
+    return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
+                                         **{k: v / width for k, v in terms.items()}}
+
+
 def build_model(design: PRSDesign, contact: ContactResult | None = None) -> LoadModel:
     """Compliances of a design, with the contact geometry of the contact stage (solved here
     when ``contact`` is not given). The design load must suit the model
@@ -235,35 +264,15 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
         # circumference-share: the contacts of one tooth ring share its circumference
         return math.pi * pitch_diameter / (1 if part == "roller" else z)
 
-    def tooth(part: str, r_c: float, width: float, profile) -> tuple[float, dict[str, float]]:
-        b = 2.0 * float(profile.tooth_half_width(r_c))
-        c = abs(r_c - profile.root_radius)
-        a = b + 2.0 * c * math.tan(beta)
-        if not 0.0 < b <= a < 2.0 * p:
-            # Yamamoto's terms take log(a / b) and log(P - a / 2) (issue 29: a math domain error,
-            # exit 70). It fails when the contact lies off the tooth: the roller's flank arc touches
-            # a straight flank at a roller radius of about r_T sin(beta), so the arc radius moves it
-            r_t = design.roller.arc_radius_mm
-            raise DesignError("roller.arc_radius_mm", r_t,
-                              f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
-                              f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
-                              f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
-                              f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
-                              f"roller.arc_radius_mm nearer r_r / sin(beta) = "
-                              f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
-        mat = getattr(mats, part)
-        terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
-                                    mat.poisson_ratio,
-                                    design.nut.outer_diameter_mm if part == "nut" else None)
-        return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
-                                             **{k: v / width for k, v in terms.items()}}
-
     d_r = design.roller.pitch_diameter_mm
-    t_s, d_s = tooth("screw", c_rs.part_radius_mm, width("screw", "rs", 2 * theo.profile.pitch_radius),
-                     theo.profile)
-    t_rs_r, d_rs_r = tooth("roller", c_rs.roller_radius_mm, width("roller", "rs", d_r), prof.roller)
-    t_nr_r, d_nr_r = tooth("roller", c_nr.roller_radius_mm, width("roller", "nr", d_r), prof.roller)
-    t_n, d_n = tooth("nut", c_nr.part_radius_mm, width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
+    t_s, d_s = _tooth_compliance(design, "screw", c_rs.part_radius_mm,
+                                 width("screw", "rs", 2 * theo.profile.pitch_radius), theo.profile)
+    t_rs_r, d_rs_r = _tooth_compliance(design, "roller", c_rs.roller_radius_mm, width("roller", "rs", d_r),
+                                       prof.roller)
+    t_nr_r, d_nr_r = _tooth_compliance(design, "roller", c_nr.roller_radius_mm, width("roller", "nr", d_r),
+                                       prof.roller)
+    t_n, d_n = _tooth_compliance(design, "nut", c_nr.part_radius_mm,
+                                 width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
     A = _section_areas(design)
     inst = design.loading.installation
     model = LoadModel(
