@@ -14,3 +14,6 @@ values (:mod:`~prs_geom.analysis.inspection`), the machining data
 it loads no mesh library (trimesh, FCL, manifold3d) and does no I/O; each stage returns a
 frozen result.
 """
+
+# the API lives in the modules; importing the package loads none of them
+__all__: list[str] = []

@@ -17,6 +17,8 @@ from prs_geom.geometry.gears import (GearPair, InternalPairChecks, RollerGearPha
                                      design_gear_pair, phasing_divisible, roller_gear_phasing, sweep_clearance)
 from prs_geom.model.design import PRSDesign
 
+__all__ = ["SWEEP_STEPS", "SWEEP_CHORD_MM", "GearAnalysis", "analyse_gears"]
+
 #: Carrier positions of the running check: one ring tooth pitch of carrier travel in this
 #: many steps (the gear contact repeats every tooth pitch).
 SWEEP_STEPS = 8

@@ -108,6 +108,9 @@ from scipy import linalg
 from prs_geom.model.errors import ConvergenceError, DesignError
 from prs_geom.progress import ProgressFn
 
+__all__ = ["LoadModel", "block_compliance", "MEMORY_MB", "iteration_bound", "chunk_size", "LoadResult",
+           "LoadBatch", "RollerLoadResult", "solve_loads_batch", "solve_loads", "solve_loads_rollers"]
+
 
 # --------------------------------------------------------------------------- model
 def _min_kernel(n: int) -> NDArray:
