@@ -12,7 +12,7 @@ from cli_helpers import run
 from prs_geom.model.design import Loading, default_design
 from prs_geom.model.io import load_design
 from prs_geom.model.errors import ConvergenceError
-from prs_geom.analysis.loads import (build_model, closed_form_equal_load, design_pitches, ellipticity, forward,
+from prs_geom.analysis.loads import (build_model, closed_form_equal_load, design_pitches, forward,
                             gap_terms, hertz_constant, loads_report, solve_loads, with_pitch_lists,
                             yamamoto_compliance)
 from strategies import standard_designs
@@ -109,16 +109,6 @@ def test_hertz_sphere_on_flat_matches_closed_form():
     C, info = hertz_constant((1 / R, 1 / R, 0.0, 0.0), eta)
     assert info["ellipticity_k"] == 1.0
     assert C == pytest.approx((9.0 / (16.0 * R)) ** (1 / 3) * eta ** (2 / 3), rel=1e-9)
-
-
-def test_ellipticity_solves_the_defining_equation():
-    from scipy import special
-    for F in (0.05, 0.3, 0.7, 0.95):
-        k = ellipticity(F)
-        m = 1 - 1 / k ** 2
-        E, K = special.ellipe(m), special.ellipk(m)
-        assert ((k * k + 1) * E - 2 * K) / ((k * k - 1) * E) == pytest.approx(F, abs=1e-12)
-        assert k > 1
 
 
 def test_yamamoto_terms_against_hand_evaluation():

@@ -54,6 +54,11 @@ from prs_geom.model.errors import ConvergenceError
 from prs_geom.geometry.helix import PitchWarp
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 
+__all__ = ["PartFlanks", "ContactBatch", "NewtonResult", "solve_collinear", "solve_gap_stationary",
+           "euclidean_distance", "part_flanks", "tooth_contacts", "ContactPoint", "contact_point",
+           "TheoreticalScrew", "corrected_screw_profile", "theoretical_screw", "ANGLE_CONVENTIONS", "tooth_gaps",
+           "ContactResult", "analyse_contact", "contact_report"]
+
 TWO_PI = 2.0 * math.pi
 
 

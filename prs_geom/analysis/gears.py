@@ -19,6 +19,8 @@ from prs_geom.geometry.gear_phasing import RollerGearPhasing, phasing_divisible,
 from prs_geom.geometry.gears import SpurGear
 from prs_geom.model.design import PRSDesign
 
+__all__ = ["SWEEP_STEPS", "SWEEP_CHORD_MM", "GearAnalysis", "analyse_gears"]
+
 #: Carrier positions of the running check: one ring tooth pitch of carrier travel in this
 #: many steps (the gear contact repeats every tooth pitch).
 SWEEP_STEPS = 8

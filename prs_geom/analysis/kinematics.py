@@ -56,6 +56,9 @@ from prs_geom.analysis.contact import ContactPoint, ContactResult, analyse_conta
 from prs_geom.geometry.frames import carrier_angles, roller_transform, rotation_z
 from prs_geom.model.design import SIZING_RTOL, PRSDesign
 
+__all__ = ["BODIES", "SIDES", "check_kinematic_sizing", "SpeedRatios", "speed_ratios", "ContactSliding",
+           "Kinematics", "contact_sliding", "kinematics", "Poses", "poses"]
+
 TWO_PI = 2.0 * math.pi
 #: Bodies whose material velocity :meth:`Kinematics.material_velocity` gives.
 BODIES = ("screw", "carrier", "roller", "nut")

@@ -33,12 +33,13 @@ Face Newton: Newton on the equations of the teeth taken as in contact plus equil
 the other teeth held at f_j = 0; the unknowns are the tooth deflections delta_j = D(f_j)
 (loads by the exact inverse law), in which the equations stay smooth where Hertz has its
 infinite slope (a tooth at or near zero load), unlike Newton in the loads.
-1. Phase 1 (the previous solver's strategy): face Newton from equal loads (or ``start``)
+1. Active set (``_Phase.ACTIVE_SET``): face Newton from equal loads (or ``start``)
    with all teeth in contact; a tooth leaves the moment its load would turn negative;
    after convergence teeth whose gap closed are brought back. It may cycle, so it is capped
    (``_HEURISTIC_ITER`` = 60 steps, ``_HEURISTIC_ROUNDS`` = 4 rounds of bringing back;
    across the documented range it needs at most 30 steps and 2 rounds).
-2. Phase 2, only if phase 1 did not end in a checked solution: a primal log-barrier method.
+2. Barrier (``_Phase.BARRIER``), only if the active set did not end in a checked solution:
+   a primal log-barrier method.
    For mu_k = 0.1 sigma^k f_m D_m (sigma = 0.03; f_m the mean tooth load, D_m its
    deflection) minimise Pi(f) - mu sum log f_j under the equilibrium equations by damped
    Newton (fraction-to-boundary 0.995, Armijo backtracking on the barrier energy, evaluated
@@ -48,11 +49,11 @@ infinite slope (a tooth at or near zero load), unlike Newton in the loads.
    globally, quadratically at the end, and these minimisers tend to the solution as
    mu -> 0. From mu <= 1e-3 f_m D_m on, every stage ends with a crossover: teeth with
    f_j >= sqrt(mu f_m / D_m) (i.e. f_j / f_m >= w_j / D_m, since f_j w_j = mu) are taken as
-   in contact, face Newton (at most ``_FACE_ITER`` = 30 steps and 4 rounds) polishes the
+   in contact, face Newton (``_Phase.CROSSOVER``, at most ``_FACE_ITER`` = 30 steps and 4 rounds) polishes the
    loads, and the result is checked. Near the solution the face equations have a
    nonsingular Jacobian, so once mu is small enough to classify the teeth the crossover
    converges quadratically; degenerate teeth (zero load and zero gap) pass either way.
-3. Check (the only way out with numbers): every tooth in contact has f_j > 0 and its
+3. Check (the only way out with numbers, ``_Phase.SOLVED``): every tooth in contact has f_j > 0 and its
    equation solved (face Newton stops when the load step is <= ``tol`` (1e-13) x the load
    per roller and the approach step <= tol x max(1 mm, |a|); quadratic convergence leaves
    residuals at rounding level, |w_j| of about 1e-14 D_ref measured), every open tooth has
@@ -62,7 +63,7 @@ Termination: every loop is capped and the barrier has a fixed number of stages (
 1e-15 f_m D_m ends it), so the solver stops after at most ``iteration_bound()`` = 1050
 Newton steps per sample, with a checked solution or :class:`ConvergenceError` (no unchecked
 number is ever returned). Measured across the documented range (2..500 teeth, both
-installations, loads 1 % to 300 %, constant and equal-load graded pitch): phase 1 alone at
+installations, loads 1 % to 300 %, constant and equal-load graded pitch): the active set alone at
 most 27 steps; the barrier path alone (``strategy="barrier"``) at most 77 steps.
 
 Linear systems (``linear_solver``)
@@ -82,7 +83,7 @@ rollers: 1 for one roller standing for all z, z for all rollers side by side.
   (LAPACK pbsv) of the block-diagonal system, O(n (z_m + 2)^3) flops and O(n z_m^2) memory
   per sample and step (z_m = 10, n = 20: about 35 us for the Cholesky). See
   :meth:`_Linear._banded`.
-* "segments" (the previous form, kept as an independent formulation): tooth-deflection
+* "segments" (an independent formulation of the same system): tooth-deflection
   increments and segment forces, banded LU (gbsv). Every tooth row of a roller holds the
   segment forces of all z_m rollers, so the bandwidth is about 4 z_m and a step costs
   about 256 n z_m^3 flops, about 150 times more than "banded" for z_m = 10 (and 30 times
@@ -94,9 +95,10 @@ Batches are cut into chunks within a memory budget (``memory_mb``, :func:`chunk_
 """
 from __future__ import annotations
 
+import enum
 import functools
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -105,6 +107,9 @@ from scipy import linalg
 
 from prs_geom.model.errors import ConvergenceError, DesignError
 from prs_geom.progress import ProgressFn
+
+__all__ = ["LoadModel", "block_compliance", "MEMORY_MB", "iteration_bound", "chunk_size", "LoadResult",
+           "LoadBatch", "RollerLoadResult", "solve_loads_batch", "solve_loads", "solve_loads_rollers"]
 
 
 # --------------------------------------------------------------------------- model
@@ -220,8 +225,8 @@ def block_compliance(nr: NDArray, rs: NDArray, coupling: NDArray | None = None) 
 
 
 # --------------------------------------------------------------------------- solver
-#: Newton steps and re-activation rounds of phase 1 (active-set Newton from equal loads)
-#: before the barrier takes over (across the documented range phase 1 needs at most 30 steps
+#: Newton steps and re-activation rounds of the active-set phase (face Newton from equal loads)
+#: before the barrier takes over (across the documented range it needs at most 30 steps
 #: and 2 rounds; a cycling active set comes back round after round).
 _HEURISTIC_ITER = 60
 _HEURISTIC_ROUNDS = 4
@@ -240,7 +245,7 @@ _N_STAGES = math.ceil(math.log(_MU0 / _MU_MIN) / math.log(1.0 / _SIGMA)) + 1
 
 
 def iteration_bound() -> int:
-    """Newton steps after which the solver gives up (ConvergenceError): phase 1, then every
+    """Newton steps after which the solver gives up (ConvergenceError): the active set, then every
     barrier stage with one crossover (module docstring)."""
     return _HEURISTIC_ITER + _N_STAGES * (_STAGE_ITER + _FACE_ITER)
 
@@ -446,7 +451,27 @@ def _dense_operator(p: _Problem) -> NDArray:
     return K
 
 
-# The previous banded form of the Newton system, kept as an independent formulation
+@dataclass(frozen=True)
+class _SegmentLayout:
+    """Sparsity layout of the "segments" Newton system of one sample (:func:`_band_layout`):
+    ``size`` unknowns, lower and upper bandwidths ``kl``, ``ku``; entries as (rows, cols,
+    values) for the constant part ``const`` and the body part ``body`` (values to multiply
+    by kref); (rows, cols, flat tooth index) of the tooth stiffness entries ``tooth``; rows
+    and columns of the roller equilibria ``roll`` (R, 4); columns of the scaled deflections
+    ``colq`` (R, 2, n) and rows of the tooth differences ``rowdiff`` (R, 2, n - 1)."""
+
+    size: int
+    kl: int
+    ku: int
+    const: tuple[NDArray, NDArray, NDArray]
+    body: tuple[NDArray, NDArray, NDArray]
+    tooth: tuple[NDArray, NDArray, NDArray]
+    roll: NDArray
+    colq: NDArray
+    rowdiff: NDArray
+
+
+# A banded form of the Newton system in segment forces, an independent formulation
 # (linear_solver="segments"). Unknowns per sample: [dlam, block 0, ..., block n-1], block j =
 # [q_j (2R, scaled by kref), P_{j-1} (2R)] with P_k the segment-force increments
 # sum_{i>k} df_i of each roller and side; rows: total equilibrium, roller equilibria,
@@ -454,7 +479,7 @@ def _dense_operator(p: _Problem) -> NDArray:
 # the differences q_{j+1} - q_j + kref body_j(P_j) = ...  Every tooth row of a roller holds
 # the segment forces of all R rollers (shared nut and screw), so the bandwidth is about 4R.
 @functools.lru_cache(maxsize=32)
-def _band_layout(n: int, R: int, m: float, bn: float, br: float, bs: float) -> dict[str, Any]:
+def _band_layout(n: int, R: int, m: float, bn: float, br: float, bs: float) -> _SegmentLayout:
     def cq(j, r, s):
         return 1 + 4 * R * j + 2 * r + s
 
@@ -496,9 +521,9 @@ def _band_layout(n: int, R: int, m: float, bn: float, br: float, bs: float) -> d
     colq = cq(jj, rr, ss).transpose(1, 2, 0)                       # (R, 2, n)
     jd, rd, sd = np.meshgrid(np.arange(n - 1), np.arange(R), np.arange(2), indexing="ij")
     rowdiff = rdiff(jd, rd, sd).transpose(1, 2, 0)                  # (R, 2, n-1)
-    return {"N": 1 + 4 * R * n, "kl": kl, "ku": ku,
-            "c": (c_rows, c_cols, c_vals.astype(np.float64)), "b": (b_rows, b_cols, b_vals.astype(np.float64)),
-            "k": (k_rows, k_cols, k_idx), "roll": roll, "colq": colq, "rowdiff": rowdiff}
+    return _SegmentLayout(size=1 + 4 * R * n, kl=kl, ku=ku, const=(c_rows, c_cols, c_vals.astype(np.float64)),
+                          body=(b_rows, b_cols, b_vals.astype(np.float64)), tooth=(k_rows, k_cols, k_idx),
+                          roll=roll, colq=colq, rowdiff=rowdiff)
 
 
 class _Linear:
@@ -521,11 +546,11 @@ class _Linear:
         elif kind == "segments":
             lay = _band_layout(p.n, p.R, p.m, p.bn, p.br, p.bs)
             self.lay = lay
-            N, kl, ku = lay["N"], lay["kl"], lay["ku"]
+            N, kl, ku = lay.size, lay.kl, lay.ku
             tpl = np.zeros((kl + ku + 1, p.B, N))
-            rows, cols, vals = lay["c"]
+            rows, cols, vals = lay.const
             tpl[ku + rows - cols, :, cols] = vals[:, None]
-            rows, cols, vals = lay["b"]
+            rows, cols, vals = lay.body
             tpl[ku + rows - cols, :, cols] = vals[:, None] * kref[None, :]
             self.tpl = tpl
 
@@ -549,13 +574,13 @@ class _Linear:
 
     def _segments(self, live, k, r, rc_roll, rc_tot, floating):
         p, lay = self.p, self.lay
-        N, kl, ku = lay["N"], lay["kl"], lay["ku"]
+        N, kl, ku = lay.size, lay.kl, lay.ku
         b, R, n = k.shape[0], p.R, p.n
         kref = self.kref[live]
         ab = self.tpl[:, live, :]
-        rows, cols, kidx = lay["k"]
+        rows, cols, kidx = lay.tooth
         ab[ku + rows - cols, :, cols] = (-k.reshape(b, -1)[:, kidx] / kref[:, None]).T
-        roll = lay["roll"]
+        roll = lay.roll
         fl = floating.astype(np.float64)                            # (b, R)
         ab[ku + roll[:, 0] - roll[:, 1], :, roll[:, 1]] = (1.0 - fl).T
         ab[ku + roll[:, 0] - roll[:, 2], :, roll[:, 2]] = -(1.0 - fl).T
@@ -565,10 +590,10 @@ class _Linear:
         rhs[:, 1:1 + R] = np.where(floating, kref[:, None] * r[:, :, 0, 0], rc_roll)
         rhs[:, 1 + R:1 + 2 * R] = kref[:, None] * (r[:, :, 0, 0] + r[:, :, 1, 0])
         if n > 1:
-            rhs[:, lay["rowdiff"]] = kref[:, None, None, None] * np.diff(r, axis=-1)
+            rhs[:, lay.rowdiff] = kref[:, None, None, None] * np.diff(r, axis=-1)
         x = linalg.solve_banded((kl, ku), ab.reshape(kl + ku + 1, b * N), rhs.reshape(-1),
                                 overwrite_ab=True, overwrite_b=True, check_finite=False).reshape(b, N)
-        qs = x[:, lay["colq"]]                                      # kref q, (b, R, 2, n)
+        qs = x[:, lay.colq]                                      # kref q, (b, R, 2, n)
         kr = kref[:, None, None, None]
         return qs / kr, self._dy(qs[..., 0] / kref[:, None, None], r, x[:, 0] / kref)
 
@@ -702,11 +727,31 @@ def chunk_size(R: int, n: int, kind: str, memory_mb: float) -> int:
     return max(1, int(memory_mb * 1e6 // _bytes_per_sample(R, n, kind)))
 
 
-def _solve_problem(p: _Problem, tol: float, max_iter: int | None, strategy: str, linear_solver: str,
-                   memory_mb: float, progress: Any = None,
-                   start: tuple[NDArray, NDArray] | None = None) -> dict[str, NDArray]:
-    if strategy not in ("auto", "barrier"):
-        raise ValueError("strategy must be 'auto' or 'barrier'")
+@dataclass(frozen=True)
+class _Solution:
+    """The state of every sample of a solved batch (chunks concatenated), rollers modelled R:
+    loads ``f`` (B, R, 2, n) N, approaches ``y`` (B, R, 2) mm, teeth held open ``pinned``
+    (B, R, 2, n), Newton steps ``iterations`` (B,), ``barrier`` (B,) whether the barrier
+    phase ran, ``ok`` (B,) whether the sample ended with a checked solution, ``rounds`` (B,)
+    re-activation rounds of the last face Newton."""
+
+    f: NDArray
+    y: NDArray
+    pinned: NDArray
+    iterations: NDArray
+    barrier: NDArray
+    ok: NDArray
+    rounds: NDArray
+
+    @staticmethod
+    def concatenate(parts: Sequence["_Solution"]) -> "_Solution":
+        """The solutions of consecutive chunks as one (batch axis first)."""
+        return _Solution(**{fld.name: np.concatenate([getattr(s, fld.name) for s in parts], axis=0)
+                            for fld in fields(_Solution)})
+
+
+def _choose_linear_solver(p: _Problem, linear_solver: str) -> str:
+    """The linear solver kind for ``linear_solver`` ("auto" resolved; module docstring)."""
     kind = linear_solver
     # the body-deflection form divides by the body compliances
     banded_ok = p.cdense is None and min(p.bn, p.br, p.bs) > 0
@@ -716,234 +761,400 @@ def _solve_problem(p: _Problem, tol: float, max_iter: int | None, strategy: str,
             (kind == "segments" and p.cdense is not None):
         raise ValueError("linear_solver must be 'auto', 'dense' or, without a dense compliance, 'segments' or "
                          "(with positive body compliances) 'banded'")
+    return kind
+
+
+def _solve_problem(p: _Problem, tol: float, max_iter: int | None, strategy: str, linear_solver: str,
+                   memory_mb: float, progress: Any = None,
+                   start: tuple[NDArray, NDArray] | None = None) -> _Solution:
+    """Solve the B problems of ``p`` chunk by chunk (memory budget ``memory_mb``, MB);
+    ``progress(samples done, B)`` after every chunk; ``start``: loads (B, R, 2, n) N and
+    approaches (B, R, 2) mm that start the active-set phase."""
+    if strategy not in ("auto", "barrier"):
+        raise ValueError("strategy must be 'auto' or 'barrier'")
+    kind = _choose_linear_solver(p, linear_solver)
     chunk = chunk_size(p.R, p.n, kind, memory_mb)
-    out: dict[str, list[NDArray]] = {}
+    parts: list[_Solution] = []
     B = p.B
     for first in range(0, B, chunk):
         idx = np.arange(first, min(B, first + chunk))
         st = None if start is None else (start[0][idx], start[1][idx])
-        res = _solve_chunk(p.take(idx), tol, iteration_bound() if max_iter is None else int(max_iter),
-                           strategy, kind, st)
-        for key, v in res.items():
-            out.setdefault(key, []).append(v)
+        parts.append(_solve_chunk(p.take(idx), tol, iteration_bound() if max_iter is None else int(max_iter),
+                                  strategy, kind, st))
         if progress is not None:
             progress(int(idx[-1]) + 1, B)
-    return {key: np.concatenate(v, axis=0) for key, v in out.items()}
+    return _Solution.concatenate(parts)
+
+
+class _Phase(enum.IntEnum):
+    """Where a sample of a chunk stands (module docstring, "Solver"). The values live in a
+    per-sample integer array; the running phases sort before the terminal ones."""
+
+    ACTIVE_SET = 0      # face Newton from equal (or given) loads, teeth leave and come back
+    BARRIER = 1         # a stage of the log-barrier method (damped Newton at fixed mu)
+    CROSSOVER = 2       # face Newton from a barrier point with the teeth classified by mu
+    SOLVED = 3          # a checked solution
+    FAILED = 4          # a cap was reached without a checked solution
+
+
+#: The largest phase value in which a sample still takes Newton steps.
+_LAST_RUNNING = _Phase.CROSSOVER
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    """One chunk of B problems and its per-sample scales, (B,) unless stated: mean tooth load
+    f_m (N; ``mean_load4`` shaped (B, 1, 1, 1)), mean linear tooth compliance ``compliance``
+    ((1, 1, 2, 1), mm/N), mean tooth deflection D_m (mm), tooth tangent stiffness ``kref``
+    (N/mm), energy scale f_m D_m (N mm), load per roller (N)."""
+
+    p: _Problem
+    tol: float
+    max_iter: int
+    mean_load: NDArray
+    mean_load4: NDArray
+    compliance: NDArray
+    mean_deflection: NDArray
+    kref: NDArray
+    energy: NDArray
+    load_per_roller: NDArray
+    lin: _Linear
+
+    @staticmethod
+    def make(p: _Problem, tol: float, max_iter: int, kind: str) -> "_Chunk":
+        """The scales of ``p`` and its linear solver of kind ``kind``."""
+        fbar = p.F / (p.m * p.R * p.n)
+        f4 = fbar.reshape(p.B, 1, 1, 1)
+        cd = p.cdiag if p.cdense is None else np.diag(p.cdense).reshape(1, 1, 2, p.n).mean(axis=-1, keepdims=True)
+        mean_deflection = (_law(p, f4) + cd * f4).max(axis=(1, 2, 3))
+        kref = 1.0 / (_law_slope(p, f4) + cd).mean(axis=(1, 2, 3))
+        return _Chunk(p=p, tol=tol, max_iter=max_iter, mean_load=fbar, mean_load4=f4, compliance=cd,
+                      mean_deflection=mean_deflection, kref=kref, energy=fbar * mean_deflection,
+                      load_per_roller=p.F / (p.m * p.R), lin=_Linear(p, kref, kind))
+
+    def start_point(self, sel: NDArray) -> tuple[NDArray, NDArray]:
+        """Equal loads f_m at every tooth of the samples ``sel`` and their tooth deflections as
+        approaches."""
+        p, f4 = self.p, self.mean_load4
+        f0 = np.broadcast_to(f4[sel], (sel.size, p.R, 2, p.n)).copy()
+        y0 = np.broadcast_to((_law(p.take(sel), f4[sel]) + self.compliance * f4[sel])[..., 0],
+                             (sel.size, p.R, 2)).copy()
+        return f0, y0
+
+
+@dataclass
+class _SolverState:
+    """The mutable state of every sample of a chunk: loads ``f`` (B, R, 2, n) N, approaches
+    ``y`` (B, R, 2) mm, teeth held open ``pinned``, ``phase`` (:class:`_Phase` values),
+    barrier parameter ``mu`` (N mm), Newton steps in all and in the current phase, face
+    re-activation ``rounds``, whether the barrier ran, and the barrier point (``f_barrier``,
+    ``y_barrier``) a crossover started from."""
+
+    f: NDArray
+    y: NDArray
+    pinned: NDArray
+    phase: NDArray
+    mu: NDArray
+    it: NDArray
+    it_phase: NDArray
+    rounds: NDArray
+    used_barrier: NDArray
+    f_barrier: NDArray
+    y_barrier: NDArray
+
+    @staticmethod
+    def initial(chunk: _Chunk, strategy: str, start: tuple[NDArray, NDArray] | None) -> "_SolverState":
+        """Equal loads (or ``start`` with strategy "auto"), all teeth in contact; strategy
+        "barrier" starts in the barrier phase."""
+        p = chunk.p
+        f, y = chunk.start_point(np.arange(p.B))
+        if start is not None and strategy == "auto":
+            f, y = start[0].copy(), start[1].copy()
+        phase = np.full(p.B, int(_Phase.ACTIVE_SET if strategy == "auto" else _Phase.BARRIER))
+        return _SolverState(f=f, y=y, pinned=np.zeros((p.B, p.R, 2, p.n), bool), phase=phase,
+                            mu=_MU0 * chunk.energy, it=np.zeros(p.B, int), it_phase=np.zeros(p.B, int),
+                            rounds=np.zeros(p.B, int), used_barrier=phase == _Phase.BARRIER,
+                            f_barrier=f.copy(), y_barrier=y.copy())
+
+    def running(self, max_iter: int) -> NDArray:
+        """Indices of the samples that take the next Newton step; those at ``max_iter`` fail."""
+        live = np.nonzero(self.phase <= _LAST_RUNNING)[0]
+        over = live[self.it[live] >= max_iter]
+        self.phase[over] = _Phase.FAILED
+        return live[self.it[live] < max_iter]
+
+    def to_barrier(self, chunk: _Chunk, sel: NDArray) -> None:
+        """Samples ``sel`` leave the active-set phase: the barrier from equal loads."""
+        if sel.size == 0:
+            return
+        f0, y0 = chunk.start_point(sel)
+        self.f[sel], self.y[sel] = f0, y0
+        self.pinned[sel] = False
+        self.phase[sel] = _Phase.BARRIER
+        self.mu[sel] = _MU0 * chunk.energy[sel]
+        self.it_phase[sel] = 0
+        self.used_barrier[sel] = True
+
+    def end_barrier_stage(self, chunk: _Chunk, sel: NDArray) -> None:
+        """A barrier stage of samples ``sel`` ended: a crossover once mu is small enough,
+        else the next stage with a smaller mu."""
+        if sel.size == 0:
+            return
+        energy = chunk.energy
+        cross = sel[self.mu[sel] <= _MU_CROSS * energy[sel] * (1 + 1e-9)]
+        lower = sel[self.mu[sel] > _MU_CROSS * energy[sel] * (1 + 1e-9)]
+        self.mu[lower] *= _SIGMA
+        self.it_phase[lower] = 0
+        if cross.size:
+            self._start_crossover(chunk, cross)
+
+    def _start_crossover(self, chunk: _Chunk, cross: NDArray) -> None:
+        """Keep the barrier point; teeth with f_j < sqrt(mu f_m / D_m) are held open."""
+        f = self.f
+        self.f_barrier[cross], self.y_barrier[cross] = f[cross], self.y[cross]
+        thr = np.sqrt(self.mu[cross] * chunk.mean_load[cross] / chunk.mean_deflection[cross]).reshape(-1, 1, 1, 1)
+        pin = f[cross] < thr
+        # the most loaded roller keeps its most loaded tooth on each side (a load path)
+        ar = np.arange(cross.size)
+        top_r = f[cross].sum(axis=(2, 3)).argmax(axis=1)
+        top_j = f[cross][ar, top_r].argmax(axis=-1)                  # (c, 2)
+        pin[ar[:, None], top_r[:, None], np.arange(2)[None, :], top_j] = False
+        self.pinned[cross] = pin
+        f[cross] = np.where(pin, 0.0, f[cross])
+        self.phase[cross] = _Phase.CROSSOVER
+        self.it_phase[cross] = 0
+        self.rounds[cross] = 0
+
+    def crossover_failed(self, chunk: _Chunk, sel: NDArray) -> None:
+        """Back to the barrier point of samples ``sel`` and on with a smaller mu; below the
+        last stage the sample has failed."""
+        if sel.size == 0:
+            return
+        self.f[sel], self.y[sel] = self.f_barrier[sel], self.y_barrier[sel]
+        self.pinned[sel] = False
+        self.phase[sel] = _Phase.BARRIER
+        self.mu[sel] *= _SIGMA
+        self.it_phase[sel] = 0
+        self.phase[sel[self.mu[sel] < _MU_MIN * chunk.energy[sel] * (1 - 1e-9)]] = _Phase.FAILED
+
+    def solution(self) -> _Solution:
+        return _Solution(f=self.f, y=self.y, pinned=self.pinned, iterations=self.it, barrier=self.used_barrier,
+                         ok=self.phase == _Phase.SOLVED, rounds=self.rounds)
+
+
+def _has_load_path(pin: NDArray) -> NDArray:
+    """(b,): some roller has a tooth in contact on both sides (R = 1: the roller)."""
+    return (~pin).any(axis=3).all(axis=2).any(axis=1)
+
+
+def _check_complementarity(chunk: _Chunk, sel: NDArray, fs: NDArray, ys: NDArray,
+                           pin: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """The check of the module docstring for samples ``sel`` with loads ``fs``, approaches
+    ``ys`` and open teeth ``pin``. Places floating rollers (all teeth open) midway in their
+    admissible range. Returns (ok (b,), approaches (b, R, 2), gaps w (b, R, 2, n) mm, D_ref
+    (b, 1, 1, 1) mm)."""
+    ps = chunk.p.take(sel)
+    c = _law(ps, np.zeros_like(fs)) + _body(ps, fs) + _clin(ps, fs) + ps.g
+    ys = ys.copy()
+    flo = pin.all(axis=(2, 3))
+    ok = np.ones(sel.size, bool)
+    if flo.any():
+        delta = ys.sum(axis=2)                                   # common approach y_nr + y_rs
+        lo = delta - c[:, :, 1].min(axis=-1)
+        hi = c[:, :, 0].min(axis=-1)
+        u = 0.5 * (lo + hi)
+        ok &= ~(flo & (lo > hi)).any(axis=1)
+        ys[:, :, 0] = np.where(flo, u, ys[:, :, 0])
+        ys[:, :, 1] = np.where(flo, delta - u, ys[:, :, 1])
+    w = c - ys[..., None]
+    dref = np.maximum(np.abs(ys).max(axis=(1, 2)), chunk.mean_deflection[sel]).reshape(-1, 1, 1, 1)
+    ok &= np.where(pin, w >= -_OPEN_TOL * dref, fs > 0).all(axis=(1, 2, 3))
+    return ok, ys, w, dref
+
+
+@dataclass(frozen=True)
+class _NewtonStep:
+    """One Newton step of the running samples ``live``: their problems, the state at the step
+    (``f``, ``y``, ``pinned``, ``phase``, ``mu``), the contact law D(f), the linear terms L f
+    and the energy gradient (mm), and the increments: deflections ``q`` (mm), approaches
+    ``dy`` (mm), loads ``d`` (N)."""
+
+    live: NDArray
+    ps: _Problem
+    f: NDArray
+    y: NDArray
+    pinned: NDArray
+    phase: NDArray
+    mu: NDArray
+    law: NDArray
+    linear: NDArray
+    grad: NDArray
+    q: NDArray
+    dy: NDArray
+    d: NDArray
+
+
+def _newton_step(chunk: _Chunk, state: _SolverState, live: NDArray) -> _NewtonStep:
+    """Assemble and solve the Newton system of the samples ``live`` (barrier terms for those
+    in a barrier stage); counts the step."""
+    ps = chunk.p.take(live)
+    fl, yl, pl, ph, ml = state.f[live], state.y[live], state.pinned[live], state.phase[live], state.mu[live]
+    bar = (ph == _Phase.BARRIER).reshape(-1, 1, 1, 1)
+    mu4 = ml.reshape(-1, 1, 1, 1)
+    lawf, slope = _law_and_slope(ps, fl)
+    Lf = _body(ps, fl) + _clin(ps, fl)
+    grad = lawf + Lf + ps.g
+    S = slope + _cdiag_part(ps)
+    if bar.any():                       # the barrier terms mu / f, mu / f^2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mf = np.where(bar, mu4 / np.where(bar, fl, 1.0), 0.0)
+            S = S + mf / np.where(bar, fl, 1.0)
+            grad = grad - mf
+    with np.errstate(divide="ignore"):
+        k = np.where(pl, 0.0, 1.0 / S)
+    r = -(grad - yl[..., None])
+    r = np.where(pl, 0.0, r)
+    rc_roll = fl[:, :, 1].sum(axis=-1) - fl[:, :, 0].sum(axis=-1)
+    rc_tot = ps.F - chunk.p.m * fl[:, :, 1].sum(axis=(1, 2))
+    q, dy = chunk.lin.solve(live, k, r, rc_roll, rc_tot, pl.all(axis=(2, 3)))
+    state.it[live] += 1
+    state.it_phase[live] += 1
+    return _NewtonStep(live=live, ps=ps, f=fl, y=yl, pinned=pl, phase=ph, mu=ml, law=lawf, linear=Lf,
+                       grad=grad, q=q, dy=dy, d=k * q)
+
+
+def _face_step(chunk: _Chunk, state: _SolverState, step: _NewtonStep) -> None:
+    """The face-Newton update of the samples of ``step`` in the active-set or crossover
+    phase: Newton in the tooth deflections (loads by the exact inverse law), a tooth whose
+    load would turn negative is held open; converged samples are checked; caps and
+    breakdowns move samples on."""
+    face = np.nonzero(step.phase != _Phase.BARRIER)[0]
+    if face.size == 0:
+        return
+    # (all running samples in face Newton, the usual case: no copies)
+    sub = (lambda a: a) if face.size == step.live.size else (lambda a: a[face])
+    sel = step.live[face]
+    pin = sub(step.pinned)
+    pf = step.ps.take(face)
+    ff = sub(step.f)
+    fn = np.where(pin, 0.0, _tooth_inv(pf, sub(step.law) + _cdiag_part(pf) * ff + sub(step.q)))
+    yn = sub(step.y) + sub(step.dy)
+    finite = np.isfinite(fn).all(axis=(1, 2, 3)) & np.isfinite(yn).all(axis=(1, 2))
+    neg = ~pin & (fn <= 0)
+    conv = finite & _face_converged(chunk, sel, ff, fn, yn, sub(step.dy), neg)
+    # a tooth whose load would turn negative leaves the contact set
+    newpin = pin | neg
+    good = finite & _has_load_path(newpin)
+    fn = np.where(newpin, 0.0, fn)
+    state.f[sel], state.y[sel], state.pinned[sel] = np.where(good.reshape(-1, 1, 1, 1), fn, ff), yn, newpin
+    if conv.any():
+        _check_converged(chunk, state, sel[conv])
+    _apply_face_caps(chunk, state, sel, sel[~good])
+
+
+def _face_converged(chunk: _Chunk, sel: NDArray, f_old: NDArray, f_new: NDArray, y_new: NDArray,
+                    dy: NDArray, neg: NDArray) -> NDArray:
+    """(b,): no load turned negative, the load step is <= tol x the load per roller and the
+    approach step <= tol x max(1 mm, |a|)."""
+    tol = chunk.tol
+    step = np.abs(f_new - f_old).max(axis=(1, 2, 3))
+    dys = np.abs(dy).max(axis=(1, 2))
+    return ~neg.any(axis=(1, 2, 3)) & (step <= tol * chunk.load_per_roller[sel]) & \
+        (dys <= tol * np.maximum(1.0, np.abs(y_new).max(axis=(1, 2))))
+
+
+def _check_converged(chunk: _Chunk, state: _SolverState, cs: NDArray) -> None:
+    """Converged face samples ``cs``: checked ones are solved; the others bring back the
+    teeth whose gap closed and solve the face again."""
+    ok, ys, w, dref = _check_complementarity(chunk, cs, state.f[cs], state.y[cs], state.pinned[cs])
+    state.y[cs] = np.where(ok.reshape(-1, 1, 1), ys, state.y[cs])
+    state.phase[cs[ok]] = _Phase.SOLVED
+    again = ~ok & (state.phase[cs] <= _LAST_RUNNING)
+    re = cs[again]
+    if re.size:
+        closed = state.pinned[re] & (w[again] < -_OPEN_TOL * dref[again])
+        state.pinned[re] &= ~closed
+        state.rounds[re] += 1
+
+
+def _apply_face_caps(chunk: _Chunk, state: _SolverState, sel: NDArray, bad: NDArray) -> None:
+    """Face samples ``sel`` past their step or round cap, or broken down (``bad``: no finite
+    step or no load path): the active-set phase hands over to the barrier, a crossover
+    returns to its barrier point."""
+    phase, it_phase, rounds = state.phase, state.it_phase, state.rounds
+    p0 = sel[(phase[sel] == _Phase.ACTIVE_SET)
+             & ((it_phase[sel] >= _HEURISTIC_ITER) | (rounds[sel] >= _HEURISTIC_ROUNDS))]
+    state.to_barrier(chunk, np.union1d(p0, bad[phase[bad] == _Phase.ACTIVE_SET]))
+    p2 = sel[(phase[sel] == _Phase.CROSSOVER) & ((it_phase[sel] >= _FACE_ITER) | (rounds[sel] >= _HEURISTIC_ROUNDS))]
+    state.crossover_failed(chunk, np.union1d(p2, bad[phase[bad] == _Phase.CROSSOVER]))
+
+
+def _barrier_step(chunk: _Chunk, state: _SolverState, step: _NewtonStep) -> None:
+    """The damped barrier-Newton update of the samples of ``step`` in a barrier stage; a
+    stage ends at a small Newton decrement, a rounding floor or its step cap."""
+    bi = np.nonzero(step.phase == _Phase.BARRIER)[0]
+    if bi.size == 0:
+        return
+    sel = step.live[bi]
+    db = step.d[bi]
+    slope = (step.grad[bi] * db).sum(axis=(1, 2, 3))
+    done_stage = ~(-slope > _THETA * step.mu[bi]) | ~np.isfinite(slope)
+    go = np.nonzero(~done_stage)[0]
+    if go.size:
+        gi = bi[go]
+        fg, dg, mg = step.f[gi], db[go], step.mu[gi].reshape(-1, 1, 1, 1)
+        pg = step.ps.take(gi)
+        alpha, accepted = _barrier_line_search(pg, fg, dg, mg, step.linear[gi] + pg.g, slope[go])
+        moved = sel[go[accepted]]
+        state.f[moved] = fg[accepted] + alpha[accepted].reshape(-1, 1, 1, 1) * dg[accepted]
+        state.y[moved] = step.y[gi[accepted]] + step.dy[gi[accepted]]
+        done_stage[go[~accepted]] = True                     # rounding floor reached
+    capped = state.it_phase[sel] >= _STAGE_ITER
+    state.end_barrier_stage(chunk, sel[done_stage | capped])
+
+
+def _barrier_line_search(pg: _Problem, fg: NDArray, dg: NDArray, mg: NDArray, grad_linear: NDArray,
+                         slope: NDArray) -> tuple[NDArray, NDArray]:
+    """Step lengths along the load steps ``dg`` from loads ``fg`` (N): fraction-to-boundary
+    0.995, then Armijo backtracking (halving, at most 60 times) on the change of the barrier
+    energy, written without cancellation (log1p, expm1). ``grad_linear`` = L f + g (mm),
+    ``mg`` the barrier parameters (b, 1, 1, 1), ``slope`` the directional derivatives (b,).
+    Returns (alpha (b,), accepted (b,))."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(dg < 0, fg / -dg, np.inf)
+    alpha = np.minimum(1.0, 0.995 * ratio.min(axis=(1, 2, 3)))
+    Ld = _body(pg, dg) + _clin(pg, dg)
+    f53 = 0.6 * pg.h * fg ** (5.0 / 3.0)
+    accepted = np.zeros(fg.shape[0], bool)
+    for _ in range(60):
+        a4 = alpha.reshape(-1, 1, 1, 1)
+        x = a4 * dg / fg
+        lp = np.log1p(x)
+        dphi = (f53 * np.expm1((5.0 / 3.0) * lp) + pg.e0 * a4 * dg
+                + pg.e1 * (a4 * fg * dg + 0.5 * a4 * a4 * dg * dg)
+                + a4 * grad_linear * dg + 0.5 * a4 * a4 * dg * Ld - mg * lp).sum(axis=(1, 2, 3))
+        ok = dphi <= 1e-4 * alpha * slope
+        accepted |= ok
+        if accepted.all():
+            break
+        alpha = np.where(accepted, alpha, 0.5 * alpha)
+    return alpha, accepted
 
 
 def _solve_chunk(p: _Problem, tol: float, max_iter: int, strategy: str, kind: str,
-                 start: tuple[NDArray, NDArray] | None) -> dict[str, NDArray]:
-    B, R, n, m = p.B, p.R, p.n, p.m
-    sh = (B, 1, 1, 1)
-    fbar = p.F / (m * R * n)
-    f4 = fbar.reshape(sh)
-    cd = p.cdiag if p.cdense is None else np.diag(p.cdense).reshape(1, 1, 2, n).mean(axis=-1, keepdims=True)
-    Dm = (_law(p, f4) + cd * f4).max(axis=(1, 2, 3))                 # mean tooth deflection
-    kref = 1.0 / (_law_slope(p, f4) + cd).mean(axis=(1, 2, 3))       # tooth tangent stiffness
-    E = fbar * Dm
-    fscale = p.F / (m * R)
-    lin = _Linear(p, kref, kind)
-
-    def start_point(sel):
-        f0 = np.broadcast_to(f4[sel], (sel.size, R, 2, n)).copy()
-        y0 = np.broadcast_to((_law(p.take(sel), f4[sel]) + cd * f4[sel])[..., 0], (sel.size, R, 2)).copy()
-        return f0, y0
-
-    every = np.arange(B)
-    f, y = start_point(every)
-    if start is not None and strategy == "auto":        # phase 1 from the given loads
-        f, y = start[0].copy(), start[1].copy()
-    pinned = np.zeros((B, R, 2, n), bool)
-    phase = np.full(B, 0 if strategy == "auto" else 1)              # 0 Newton, 1 barrier, 2 crossover, 3 done, 4 failed
-    mu = _MU0 * E
-    it = np.zeros(B, int)
-    it_phase = np.zeros(B, int)
-    rounds = np.zeros(B, int)                                        # phase-1 re-activations
-    used_barrier = phase == 1
-    fb, yb = f.copy(), y.copy()                                      # barrier state during a crossover
-
-    def layout_ok(pin):
-        # a load path: some roller with free teeth on both sides (R = 1: the roller)
-        return (~pin).any(axis=3).all(axis=2).any(axis=1)
-
-    def to_barrier(sel):
-        if sel.size == 0:
-            return
-        f0, y0 = start_point(sel)
-        f[sel], y[sel] = f0, y0
-        pinned[sel] = False
-        phase[sel] = 1
-        mu[sel] = _MU0 * E[sel]
-        it_phase[sel] = 0
-        used_barrier[sel] = True
-
-    def after_stage(sel):
-        """A barrier stage ended: crossover or a smaller mu."""
-        if sel.size == 0:
-            return
-        cross = sel[mu[sel] <= _MU_CROSS * E[sel] * (1 + 1e-9)]
-        lower = sel[mu[sel] > _MU_CROSS * E[sel] * (1 + 1e-9)]
-        mu[lower] *= _SIGMA
-        it_phase[lower] = 0
-        if cross.size:
-            fb[cross], yb[cross] = f[cross], y[cross]
-            thr = np.sqrt(mu[cross] * fbar[cross] / Dm[cross]).reshape(-1, 1, 1, 1)
-            pin = f[cross] < thr
-            # the most loaded roller keeps its most loaded tooth on each side (a load path)
-            ar = np.arange(cross.size)
-            top_r = f[cross].sum(axis=(2, 3)).argmax(axis=1)
-            top_j = f[cross][ar, top_r].argmax(axis=-1)                  # (c, 2)
-            pin[ar[:, None], top_r[:, None], np.arange(2)[None, :], top_j] = False
-            pinned[cross] = pin
-            f[cross] = np.where(pin, 0.0, f[cross])
-            phase[cross] = 2
-            it_phase[cross] = 0
-            rounds[cross] = 0
-
-    def cross_failed(sel):
-        if sel.size == 0:
-            return
-        f[sel], y[sel] = fb[sel], yb[sel]
-        pinned[sel] = False
-        phase[sel] = 1
-        mu[sel] *= _SIGMA
-        it_phase[sel] = 0
-        phase[sel[mu[sel] < _MU_MIN * E[sel] * (1 - 1e-9)]] = 4
-
-    def verify(sel, fs, ys, pin):
-        """Complementarity check; places floating rollers; returns ok and the multipliers."""
-        ps = p.take(sel)
-        c = _law(ps, np.zeros_like(fs)) + _body(ps, fs) + _clin(ps, fs) + ps.g
-        ys = ys.copy()
-        flo = pin.all(axis=(2, 3))
-        ok = np.ones(sel.size, bool)
-        if flo.any():
-            delta = ys.sum(axis=2)                                   # common approach y_nr + y_rs
-            lo = delta - c[:, :, 1].min(axis=-1)
-            hi = c[:, :, 0].min(axis=-1)
-            u = 0.5 * (lo + hi)
-            ok &= ~(flo & (lo > hi)).any(axis=1)
-            ys[:, :, 0] = np.where(flo, u, ys[:, :, 0])
-            ys[:, :, 1] = np.where(flo, delta - u, ys[:, :, 1])
-        w = c - ys[..., None]
-        dref = np.maximum(np.abs(ys).max(axis=(1, 2)), Dm[sel]).reshape(-1, 1, 1, 1)
-        ok &= np.where(pin, w >= -_OPEN_TOL * dref, fs > 0).all(axis=(1, 2, 3))
-        return ok, ys, w, dref
-
+                 start: tuple[NDArray, NDArray] | None) -> _Solution:
+    """Solve one chunk: Newton steps of every running sample until each is solved or has
+    failed (module docstring, "Solver")."""
+    chunk = _Chunk.make(p, tol, max_iter, kind)
+    state = _SolverState.initial(chunk, strategy, start)
     while True:
-        live = np.nonzero(phase <= 2)[0]
+        live = state.running(max_iter)
         if live.size == 0:
             break
-        over = live[it[live] >= max_iter]
-        phase[over] = 4
-        live = live[it[live] < max_iter]
-        if live.size == 0:
-            break
-        ps = p.take(live)
-        fl, yl, pl, ph, ml = f[live], y[live], pinned[live], phase[live], mu[live]
-        bar = (ph == 1).reshape(-1, 1, 1, 1)
-        mu4 = ml.reshape(-1, 1, 1, 1)
-        lawf, slope = _law_and_slope(ps, fl)
-        Lf = _body(ps, fl) + _clin(ps, fl)
-        grad = lawf + Lf + ps.g
-        S = slope + _cdiag_part(ps)
-        if bar.any():                       # the barrier terms mu / f, mu / f^2
-            with np.errstate(divide="ignore", invalid="ignore"):
-                mf = np.where(bar, mu4 / np.where(bar, fl, 1.0), 0.0)
-                S = S + mf / np.where(bar, fl, 1.0)
-                grad = grad - mf
-        with np.errstate(divide="ignore"):
-            k = np.where(pl, 0.0, 1.0 / S)
-        r = -(grad - yl[..., None])
-        r = np.where(pl, 0.0, r)
-        rc_roll = fl[:, :, 1].sum(axis=-1) - fl[:, :, 0].sum(axis=-1)
-        rc_tot = ps.F - m * fl[:, :, 1].sum(axis=(1, 2))
-        q, dy = lin.solve(live, k, r, rc_roll, rc_tot, pl.all(axis=(2, 3)))
-        d = k * q
-        it[live] += 1
-        it_phase[live] += 1
-
-        # ---- face Newton (phase 0: phase 1 of the module docstring; phase 2: crossover)
-        face = np.nonzero(ph != 1)[0]
-        if face.size:
-            # (all live samples in face Newton, the usual case: no copies)
-            sub = (lambda a: a) if face.size == live.size else (lambda a: a[face])
-            sel = live[face]
-            pin = sub(pl)
-            pf = ps.take(face)
-            ff = sub(fl)
-            # Newton in the tooth deflections: delta + q, loads by the exact inverse law
-            fn = np.where(pin, 0.0, _tooth_inv(pf, sub(lawf) + _cdiag_part(pf) * ff + sub(q)))
-            yn = sub(yl) + sub(dy)
-            finite = np.isfinite(fn).all(axis=(1, 2, 3)) & np.isfinite(yn).all(axis=(1, 2))
-            neg = ~pin & (fn <= 0)
-            anyneg = neg.any(axis=(1, 2, 3))
-            step = np.abs(fn - ff).max(axis=(1, 2, 3))
-            dys = np.abs(sub(dy)).max(axis=(1, 2))
-            conv = finite & ~anyneg & (step <= tol * fscale[sel]) & \
-                (dys <= tol * np.maximum(1.0, np.abs(yn).max(axis=(1, 2))))
-            # a tooth whose load would turn negative leaves the contact set
-            newpin = pin | neg
-            good = finite & layout_ok(newpin)
-            fn = np.where(newpin, 0.0, fn)
-            f[sel], y[sel], pinned[sel] = np.where(good.reshape(-1, 1, 1, 1), fn, ff), yn, newpin
-            bad = sel[~good]
-            if conv.any():
-                cs = sel[conv]
-                ok, ys, w, dref = verify(cs, f[cs], y[cs], pinned[cs])
-                y[cs] = np.where(ok.reshape(-1, 1, 1), ys, y[cs])
-                phase[cs[ok]] = 3
-                # bring back the teeth whose gap closed and solve the face again
-                sub = ~ok & (phase[cs] <= 2)
-                re = cs[sub]
-                if re.size:
-                    closed = pinned[re] & (w[sub] < -_OPEN_TOL * dref[sub])
-                    pinned[re] &= ~closed
-                    rounds[re] += 1
-            # caps and breakdowns
-            p0 = sel[(phase[sel] == 0) & ((it_phase[sel] >= _HEURISTIC_ITER) | (rounds[sel] >= _HEURISTIC_ROUNDS))]
-            to_barrier(np.union1d(p0, bad[phase[bad] == 0]))
-            p2 = sel[(phase[sel] == 2) & ((it_phase[sel] >= _FACE_ITER) | (rounds[sel] >= _HEURISTIC_ROUNDS))]
-            cross_failed(np.union1d(p2, bad[phase[bad] == 2]))
-
-        # ---- barrier Newton with Armijo backtracking on the barrier energy
-        bi = np.nonzero(ph == 1)[0]
-        if bi.size:
-            sel = live[bi]
-            fb0, db, mub = fl[bi], d[bi], ml[bi].reshape(-1, 1, 1, 1)
-            slope = (grad[bi] * db).sum(axis=(1, 2, 3))
-            done_stage = ~(-slope > _THETA * ml[bi]) | ~np.isfinite(slope)
-            go = np.nonzero(~done_stage)[0]
-            if go.size:
-                fg, dg, mg = fb0[go], db[go], mub[go]
-                pg = ps.take(bi[go])
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    ratio = np.where(dg < 0, fg / -dg, np.inf)
-                alpha = np.minimum(1.0, 0.995 * ratio.min(axis=(1, 2, 3)))
-                Lfg = Lf[bi[go]] + pg.g
-                Ld = _body(pg, dg) + _clin(pg, dg)
-                f53 = 0.6 * pg.h * fg ** (5.0 / 3.0)
-                sl = slope[go]
-                accepted = np.zeros(go.size, bool)
-                for _ in range(60):
-                    a4 = alpha.reshape(-1, 1, 1, 1)
-                    x = a4 * dg / fg
-                    lp = np.log1p(x)
-                    dphi = (f53 * np.expm1((5.0 / 3.0) * lp) + pg.e0 * a4 * dg
-                            + pg.e1 * (a4 * fg * dg + 0.5 * a4 * a4 * dg * dg)
-                            + a4 * Lfg * dg + 0.5 * a4 * a4 * dg * Ld - mg * lp).sum(axis=(1, 2, 3))
-                    ok = dphi <= 1e-4 * alpha * sl
-                    accepted |= ok
-                    if accepted.all():
-                        break
-                    alpha = np.where(accepted, alpha, 0.5 * alpha)
-                moved = sel[go[accepted]]
-                f[moved] = fg[accepted] + alpha[accepted].reshape(-1, 1, 1, 1) * dg[accepted]
-                y[moved] = yl[bi[go[accepted]]] + dy[bi[go[accepted]]]
-                done_stage[go[~accepted]] = True                     # rounding floor reached
-            capped = it_phase[sel] >= _STAGE_ITER
-            after_stage(sel[done_stage | capped])
-    return {"f": f, "y": y, "pinned": pinned, "it": it, "barrier": used_barrier, "ok": phase == 3, "rounds": rounds}
+        step = _newton_step(chunk, state, live)
+        _face_step(chunk, state, step)
+        _barrier_step(chunk, state, step)
+    return state.solution()
 
 
 # --------------------------------------------------------------------------- forward
@@ -1084,12 +1295,13 @@ class RollerLoadResult:
                 "max_ldc": float(max(per["nut_roller"].max(), per["roller_screw"].max()))}
 
 
-def _failed(res: dict[str, NDArray], what: str) -> None:
-    bad = np.nonzero(~res["ok"])[0]
+def _failed(res: _Solution, what: str) -> None:
+    """Raise :class:`ConvergenceError` if a sample of ``res`` has no checked solution."""
+    bad = np.nonzero(~res.ok)[0]
     if bad.size:
         raise ConvergenceError(
             f"tooth-load solver did not converge for {bad.size} {what} (first: index {int(bad[0])}) within "
-            f"{int(res['it'][bad].max())} Newton steps; no result is returned")
+            f"{int(res.iterations[bad].max())} Newton steps; no result is returned")
 
 
 def solve_loads_batch(model: LoadModel, loads: float | Sequence[float] | NDArray, g_nr: NDArray, g_rs: NDArray,
@@ -1103,13 +1315,13 @@ def solve_loads_batch(model: LoadModel, loads: float | Sequence[float] | NDArray
     gaps (:func:`gap_terms`), mm, (B, n); ``linear_at``: tooth load(s) (N, scalar or (B,))
     at which Hertz is replaced by its tangent (the linear model B f = x of docs/theory
     section 4). The batch is solved in chunks that fit ``memory_mb``; ``progress(stage,
-    samples done, B)`` is called after every chunk. ``strategy="barrier"`` skips phase 1;
+    samples done, B)`` is called after every chunk. ``strategy="barrier"`` skips the active-set phase;
     ``linear_solver``: "auto" ("banded" without, "dense" with a dense compliance),
     "banded", "segments" or "dense" (module docstring, "Linear systems"; the same loads to
     rounding).
     Raises :class:`ConvergenceError` if any sample does not converge within ``max_iter``
     Newton steps (default :func:`iteration_bound`). ``start``: a solution (one, or one per
-    sample) whose loads and approaches start phase 1 instead of equal loads (e.g. the
+    sample) whose loads and approaches start the active-set phase instead of equal loads (e.g. the
     unperturbed design in a tolerance study); it changes the path, not the answer."""
     p = _make_problem(model, loads, g_nr, g_rs, linear_at, rollers=False)
     cb = None if progress is None else (lambda done, total: progress(stage, done, total))
@@ -1125,9 +1337,9 @@ def solve_loads_batch(model: LoadModel, loads: float | Sequence[float] | NDArray
         st = (f0, y0)
     res = _solve_problem(p, tol, max_iter, strategy, linear_solver, memory_mb, cb, st)
     _failed(res, "of the samples")
-    f, y, act = res["f"][:, 0], res["y"][:, 0], ~res["pinned"][:, 0]
-    return LoadBatch(p.F.copy(), f[:, 0].copy(), f[:, 1].copy(), y[:, 0].copy(), y[:, 1].copy(), res["it"],
-                     act[:, 0].copy(), act[:, 1].copy(), res["barrier"])
+    f, y, act = res.f[:, 0], res.y[:, 0], ~res.pinned[:, 0]
+    return LoadBatch(p.F.copy(), f[:, 0].copy(), f[:, 1].copy(), y[:, 0].copy(), y[:, 1].copy(), res.iterations,
+                     act[:, 0].copy(), act[:, 1].copy(), res.barrier)
 
 
 def solve_loads(model: LoadModel, load: float, g_nr: NDArray, g_rs: NDArray,
@@ -1162,7 +1374,7 @@ def solve_loads_rollers(model: LoadModel, loads: float | Sequence[float] | NDArr
     ``linear_at``, ``tol``, ``max_iter``, ``strategy``, ``linear_solver`` and ``memory_mb``
     as in :func:`solve_loads_batch`; with the default linear solver a Newton step costs
     O(n (z + 2)^3) flops per sample (module docstring, "Linear systems"; z = 10, n = 20:
-    about 15 times faster than the previous "segments" form).
+    about 15 times faster than the "segments" form).
     """
     g_nr = np.asarray(g_nr, dtype=np.float64)
     g_rs = np.asarray(g_rs, dtype=np.float64)
@@ -1172,9 +1384,9 @@ def solve_loads_rollers(model: LoadModel, loads: float | Sequence[float] | NDArr
     p = _make_problem(model, loads, g_nr, g_rs, linear_at, rollers=True)
     res = _solve_problem(p, tol, max_iter, strategy, linear_solver, memory_mb)
     _failed(res, "of the samples")
-    f, y, act = res["f"], res["y"], ~res["pinned"]
-    out = RollerLoadResult(p.F.copy(), f[:, :, 0], f[:, :, 1], y[:, :, 0], y[:, :, 1], res["it"],
-                           act[:, :, 0], act[:, :, 1], res["barrier"])
+    f, y, act = res.f, res.y, ~res.pinned
+    out = RollerLoadResult(p.F.copy(), f[:, :, 0], f[:, :, 1], y[:, :, 0], y[:, :, 1], res.iterations,
+                           act[:, :, 0], act[:, :, 1], res.barrier)
     if single:
         return RollerLoadResult(float(out.load_n[0]), out.f_nr[0], out.f_rs[0], out.approach_nr_mm[0],
                                 out.approach_rs_mm[0], int(out.iterations[0]), out.active_nr[0],

@@ -40,9 +40,9 @@ Compliances
 * Hertz point contact of the roller's spherical flank (radius r_T) with the screw's or
   nut's straight flank, curvatures 1/r_T, 1/r_T and 0, +-sin(beta)/r_c at the actual contact
   radius r_c of the contact solver; ellipticity k from the complete elliptic integrals
-  (scipy); normal approach delta = C Q^(2/3); the axial load is F = Q n_z, with n_z the axial
-  component of the contact normal from the contact solver (about cos(beta) cos(lambda)), so
-  the axial approach is C (F / n_z)^(2/3) / n_z.
+  (:mod:`prs_geom.analysis.hertz`); normal approach delta = C Q^(2/3); the axial load is
+  F = Q n_z, with n_z the axial component of the contact normal from the contact solver
+  (about cos(beta) cos(lambda)), so the axial approach is C (F / n_z)^(2/3) / n_z.
 * Thread teeth (Yamamoto, Appendix A): bending, shear, root tilt, root shear and radial
   terms. Yamamoto's terms are per unit circumferential width; ``design.loads.tooth_width``
   says which width one contact load acts over (:class:`~prs_geom.model.design.LoadSettings`).
@@ -69,13 +69,13 @@ from typing import Any, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import optimize, special
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
+from prs_geom.analysis.hertz import hertz_contact
 from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, LoadResult, RollerLoadResult,
                                            block_compliance, chunk_size, iteration_bound, solve_loads, solve_loads_batch,
                                            solve_loads_rollers)
-from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
 from prs_geom.progress import ProgressFn
@@ -84,49 +84,26 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
            "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
-           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
+           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
-           "check_load_scale"]
+           "check_load_scale", "MODEL_RISK_NOT_COMPUTED", "design_pitch"]
 
 
 # --------------------------------------------------------------------------- Hertz
-def ellipticity(F_rho: float) -> float:
-    """k >= 1 with F(rho) = [(k^2 + 1) E(e) - 2 K(e)] / [(k^2 - 1) E(e)], e^2 = 1 - 1/k^2."""
-    if F_rho <= 1e-12:
-        return 1.0
-
-    def f(k: float) -> float:
-        m = 1.0 - 1.0 / (k * k)
-        E, K = special.ellipe(m), special.ellipk(m)
-        return ((k * k + 1.0) * E - 2.0 * K) / ((k * k - 1.0) * E) - F_rho
-
-    return optimize.brentq(f, 1.0 + 1e-9, 1e4, xtol=1e-14, rtol=1e-15)
-
-
 def hertz_constant(curvatures: Sequence[float], eta: float) -> tuple[float, dict[str, float]]:
     """C with normal approach delta = C Q^(2/3) (mm, Q in N) for principal curvatures
-    (rho11, rho12, rho21, rho22) (1/mm) and eta = sum (1 - nu^2)/E (1/MPa)."""
+    (rho11, rho12, rho21, rho22) (1/mm; plane 2 is the circumferential direction) and
+    eta = sum (1 - nu^2)/E (1/MPa), with the ellipse constants of
+    :func:`prs_geom.analysis.hertz.hertz_contact` (semi-axes per Q^(1/3), mm N^(-1/3))."""
     r11, r12, r21, r22 = curvatures
-    sum_rho = r11 + r12 + r21 + r22
-    if sum_rho <= 0:
+    if r11 + r12 + r21 + r22 <= 0:
         raise DesignError("roller.arc_radius_mm", None, "the contact curvature sum must be positive")
-    F_rho = (abs(r11 - r12) + abs(r21 - r22)) / sum_rho
-    k = ellipticity(F_rho)
-    m = 1.0 - 1.0 / (k * k)
-    E, K = float(special.ellipe(m)), float(special.ellipk(m))
-    C = (2.0 * K / math.pi) * (math.pi / (2.0 * k * k * E)) ** (1.0 / 3.0) \
-        * (3.0 * eta / (2.0 * sum_rho)) ** (2.0 / 3.0) * sum_rho / 2.0
-    # semi-axes per Q^(1/3): a = (2 k^2 E / pi)^(1/3) (3 Q eta / (2 sum_rho))^(1/3) lies in the
-    # principal plane of the smaller curvature sum, b = (2 E / (pi k))^(1/3) (...) in the other
-    base = (3.0 * eta / (2.0 * sum_rho)) ** (1.0 / 3.0)
-    a_coef = (2.0 * k * k * E / math.pi) ** (1.0 / 3.0) * base
-    b_coef = (2.0 * E / (math.pi * k)) ** (1.0 / 3.0) * base
-    # plane 2 (rho12 + rho22) is the circumferential direction of the callers' curvature order
-    circ = b_coef if r12 + r22 >= r11 + r21 else a_coef
-    return C, {"sum_rho_per_mm": sum_rho, "F_rho": F_rho, "ellipticity_k": k,
-               "semi_major_per_cbrt_N_mm": a_coef, "semi_minor_per_cbrt_N_mm": b_coef,
-               "circumferential_semi_axis_per_cbrt_N_mm": circ}
+    c = hertz_contact(curvatures, eta)
+    return c.approach_constant, {"sum_rho_per_mm": c.curvature_sum_per_mm, "F_rho": c.curvature_difference,
+                                 "ellipticity_k": c.ellipticity, "semi_major_per_cbrt_N_mm": c.semi_major_per_cbrt_n,
+                                 "semi_minor_per_cbrt_N_mm": c.semi_minor_per_cbrt_n,
+                                 "circumferential_semi_axis_per_cbrt_N_mm": c.plane_2_semi_axis_per_cbrt_n}
 
 
 # --------------------------------------------------------------------------- Yamamoto
@@ -218,6 +195,35 @@ def check_load_scale(design: PRSDesign, model: LoadModel | None = None, load_n: 
     raise DesignError(field, shown, why)
 
 
+def _tooth_compliance(design: PRSDesign, part: str, r_c: float, width: float,
+                      profile: ThreadProfile) -> tuple[float, dict[str, float]]:
+    """Yamamoto compliance (mm/N, axial) of the ``part`` tooth loaded at radius ``r_c`` (mm)
+    over circumferential ``width`` (mm), and its terms: tooth thickness b at the contact
+    radius, root distance c, root thickness a (mm), the width and each term per width."""
+    beta, p, mats = design.thread.beta, design.thread.pitch_mm, design.materials
+    b = 2.0 * float(profile.tooth_half_width(r_c))
+    c = abs(r_c - profile.root_radius)
+    a = b + 2.0 * c * math.tan(beta)
+    if not 0.0 < b <= a < 2.0 * p:
+        # Yamamoto's terms take log(a / b) and log(P - a / 2), out of their domain when the
+        # contact lies off the tooth: the roller's flank arc touches a straight flank at a
+        # roller radius of about r_T sin(beta), so the arc radius moves it
+        r_t = design.roller.arc_radius_mm
+        raise DesignError("roller.arc_radius_mm", r_t,
+                          f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
+                          f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
+                          f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
+                          f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
+                          f"roller.arc_radius_mm nearer r_r / sin(beta) = "
+                          f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
+    mat = getattr(mats, part)
+    terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
+                                mat.poisson_ratio,
+                                design.nut.outer_diameter_mm if part == "nut" else None)
+    return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
+                                         **{k: v / width for k, v in terms.items()}}
+
+
 def build_model(design: PRSDesign, contact: ContactResult | None = None) -> LoadModel:
     """Compliances of a design, with the contact geometry of the contact stage (solved here
     when ``contact`` is not given). The design load must suit the model
@@ -258,35 +264,15 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
         # circumference-share: the contacts of one tooth ring share its circumference
         return math.pi * pitch_diameter / (1 if part == "roller" else z)
 
-    def tooth(part: str, r_c: float, width: float, profile) -> tuple[float, dict[str, float]]:
-        b = 2.0 * float(profile.tooth_half_width(r_c))
-        c = abs(r_c - profile.root_radius)
-        a = b + 2.0 * c * math.tan(beta)
-        if not 0.0 < b <= a < 2.0 * p:
-            # Yamamoto's terms take log(a / b) and log(P - a / 2) (issue 29: a math domain error,
-            # exit 70). It fails when the contact lies off the tooth: the roller's flank arc touches
-            # a straight flank at a roller radius of about r_T sin(beta), so the arc radius moves it
-            r_t = design.roller.arc_radius_mm
-            raise DesignError("roller.arc_radius_mm", r_t,
-                              f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
-                              f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
-                              f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
-                              f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
-                              f"roller.arc_radius_mm nearer r_r / sin(beta) = "
-                              f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
-        mat = getattr(mats, part)
-        terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
-                                    mat.poisson_ratio,
-                                    design.nut.outer_diameter_mm if part == "nut" else None)
-        return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
-                                             **{k: v / width for k, v in terms.items()}}
-
     d_r = design.roller.pitch_diameter_mm
-    t_s, d_s = tooth("screw", c_rs.part_radius_mm, width("screw", "rs", 2 * theo.profile.pitch_radius),
-                     theo.profile)
-    t_rs_r, d_rs_r = tooth("roller", c_rs.roller_radius_mm, width("roller", "rs", d_r), prof.roller)
-    t_nr_r, d_nr_r = tooth("roller", c_nr.roller_radius_mm, width("roller", "nr", d_r), prof.roller)
-    t_n, d_n = tooth("nut", c_nr.part_radius_mm, width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
+    t_s, d_s = _tooth_compliance(design, "screw", c_rs.part_radius_mm,
+                                 width("screw", "rs", 2 * theo.profile.pitch_radius), theo.profile)
+    t_rs_r, d_rs_r = _tooth_compliance(design, "roller", c_rs.roller_radius_mm, width("roller", "rs", d_r),
+                                       prof.roller)
+    t_nr_r, d_nr_r = _tooth_compliance(design, "roller", c_nr.roller_radius_mm, width("roller", "nr", d_r),
+                                       prof.roller)
+    t_n, d_n = _tooth_compliance(design, "nut", c_nr.part_radius_mm,
+                                 width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
     A = _section_areas(design)
     inst = design.loading.installation
     model = LoadModel(

@@ -33,7 +33,7 @@ Loaded flanks (load path of :mod:`prs_geom.loads`): roller upper flank by the sc
 lower flank by the nut; nut upper flank by the roller. The nut's lower flank carries no
 load; grinding it keeps the designed tooth thickness and may be skipped.
 
-Numbers on the sheets (issue 28): every length in mm is rounded to 1e-9 mm (``round(x, 9)``)
+Numbers on the sheets: every length in mm is rounded to 1e-9 mm (``round(x, 9)``)
 and every length in um to 1e-6 um (``round(x, 6)``), the same 1 pm, a thousandth of the
 smallest pitch correction that matters, so that no sheet carries float noise such as
 0.49999999999999956. The designed and base flank positions are rounded first and the axial
@@ -50,11 +50,15 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
-from prs_geom.model.design import PRSDesign
+from prs_geom.model.design import PRSDesign, Tolerances
 from prs_geom.geometry.datum import datum_mark
-from prs_geom.geometry.profiles import ThreadProfiles
+from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
+
+__all__ = ["COLUMNS", "REFERENCE_TEMPERATURE_C", "MM_DECIMALS", "UM_DECIMALS", "mm", "um", "MachiningSheet",
+           "start_table", "INDEXING", "machining_sheet", "machining_sheets"]
 
 COLUMNS = [
     ("tooth", "tooth", ""),
@@ -143,19 +147,44 @@ INDEXING = ("grind start 1 over the engaged length; then for each next start ind
             "flanks of all starts first, then the upper flanks")
 
 
+@dataclass(frozen=True)
+class _BaseCut:
+    """The base cut of a part with designed pitch list ``pitches`` (n - 1,) mm: base pitch
+    p_b (the smallest), designed positions z_j and cumulative shifts Delta_j = z_j - (j - 1)
+    p_b (n,), mm, and the thickness stock Delta_n (mm)."""
+
+    pitches: NDArray
+    base_pitch: float
+    positions: NDArray
+    shifts: NDArray
+    stock: float
+
+    @staticmethod
+    def of(pl: NDArray) -> "_BaseCut":
+        p_b = float(pl.min())
+        # positions as sums of small differences (full float64 precision for sub-um shifts)
+        delta = np.concatenate([[0.0], np.cumsum(pl - p_b)])
+        return _BaseCut(pitches=pl, base_pitch=p_b, positions=np.concatenate([[0.0], np.cumsum(pl)]), shifts=delta,
+                        stock=float(delta[-1]))
+
+
 def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float],
                     inspection: dict[str, Any] | None = None) -> MachiningSheet:
     """The sheet of ``part`` ("roller" or "nut"); ``normal_axial`` maps "screw" and "nut" to
     the |n_z| of the screw-roller and roller-nut contacts; ``inspection``: the part's report
     from :func:`prs_geom.analysis.inspection.inspection_report`, stated in the header."""
-    pl = np.asarray(design.pitch_list(part), dtype=np.float64)
-    n = len(pl) + 1
-    p_b = float(pl.min())
-    # positions as sums of small differences (full float64 precision for sub-um shifts)
-    z = np.concatenate([[0.0], np.cumsum(pl)])
-    delta = np.concatenate([[0.0], np.cumsum(pl - p_b)])
-    delta_n = float(delta[-1])
+    cut = _BaseCut.of(np.asarray(design.pitch_list(part), dtype=np.float64))
     prof = getattr(ThreadProfiles.from_design(design), part)
+    return MachiningSheet(part, _sheet_header(design, part, cut, prof, inspection),
+                          _flank_rows(design, part, cut, prof, normal_axial), start_table(design, part))
+
+
+def _flank_rows(design: PRSDesign, part: str, cut: _BaseCut, prof: ThreadProfile,
+                normal_axial: dict[str, float]) -> list[dict[str, Any]]:
+    """One row per tooth and flank (:data:`COLUMNS`), lengths rounded as the module
+    docstring states."""
+    pl, p_b, z, delta, delta_n = cut.pitches, cut.base_pitch, cut.positions, cut.shifts, cut.stock
+    n = len(pl) + 1
     t = float(prof.tooth_half_width(prof.pitch_radius))
     loaded = {"roller": {"lower": "nut", "upper": "screw"}, "nut": {"lower": "-", "upper": "roller"}}[part]
     nz = {"roller": {"lower": normal_axial["nut"], "upper": normal_axial["screw"]},
@@ -199,14 +228,28 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
                 "on_part": bool(-1e-12 <= designed <= length + 1e-12),
                 "inspection_position_mm": designed,
             })
+    return rows
+
+
+def _tolerance_text(tol: Tolerances | None) -> str:
+    """Where the sheet's flank tolerances come from."""
     if tol is None:
-        tol_text = "not synthesised: the design has no [tolerances] section (prs-geom tolerance --target-ldc ... --out)"
-    else:
-        tol_text = f"per flank from the design's [tolerances]: {tol.source}"
-        if tol.target_ldc is not None:
-            # a design file may state the target without the confidence (issue 29: that was exit 70)
-            conf = f", confidence {tol.confidence:g}" if tol.confidence is not None else ""
-            tol_text += f" (target worst LDC {tol.target_ldc:g}{conf}, seed {tol.seed})"
+        return "not synthesised: the design has no [tolerances] section (prs-geom tolerance --target-ldc ... --out)"
+    tol_text = f"per flank from the design's [tolerances]: {tol.source}"
+    if tol.target_ldc is not None:
+        # a design file may state the target without the confidence
+        conf = f", confidence {tol.confidence:g}" if tol.confidence is not None else ""
+        tol_text += f" (target worst LDC {tol.target_ldc:g}{conf}, seed {tol.seed})"
+    return tol_text
+
+
+def _sheet_header(design: PRSDesign, part: str, cut: _BaseCut, prof: ThreadProfile,
+                  inspection: dict[str, Any] | None) -> dict[str, Any]:
+    """The sheet header: datums, process, tolerances, thermal data, indexing, inspection."""
+    pl, p_b, delta_n = cut.pitches, cut.base_pitch, cut.stock
+    n = len(pl) + 1
+    tol = design.tolerances
+    tol_text = _tolerance_text(tol)
     alpha = getattr(design.materials, part).thermal_expansion_per_k
     mark = datum_mark(prof, 0.0, 0.5 * design.nut.outer_diameter_mm if prof.internal else None)
     header = {
@@ -237,7 +280,7 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
             f"{inspection['gauge']} diameter {inspection['gauge_diameter_mm']:.6f} mm, measurement M = "
             f"{inspection['measurement_mm']:.6f} mm at 20 degC "
             f"({inspection['temperature_coefficient_um_per_k']:.3f} um/K); {inspection['method']}")
-    return MachiningSheet(part, header, rows, start_table(design, part))
+    return header
 
 
 def machining_sheets(design: PRSDesign, contact: ContactResult | None = None,

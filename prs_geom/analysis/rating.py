@@ -57,7 +57,7 @@ pressure ``rating.static_pressure_limit_mpa`` (4200 MPa, ISO 76 point contact), 
 sharing; the static safety against the material limit from the actual tooth loads is
 (p_lim / p_max)^3 (the load factor, p is proportional to Q^(1/3)).
 
-Limit checks (issue 28): ``limits.checks`` lists speed, d n, critical speed, buckling and
+Limit checks: ``limits.checks`` lists speed, d n, critical speed, buckling and
 static safety as ``{name, kind, value, limit, unit, margin, passed}`` at the largest duty
 speed and load (:data:`LIMIT_CHECKS`; margin = limit / value - 1 for an upper limit, value /
 limit - 1 for the lower limit s_0 >= ``rating.required_static_safety``; >= 0 passes).
@@ -92,7 +92,7 @@ __all__ = ["LP_C", "LP_H", "WEIBULL_E", "LP_BALL_CONSTANT", "A1_TABLE", "END_CAS
            "calibration_constant", "calibration_spread", "ContactRings", "contact_rings", "dynamic_load_rating",
            "static_load_rating", "system_life", "hertz_pressure", "efficiency", "drive_torque", "critical_speed",
            "buckling_load", "double_nut", "LIMIT_CHECKS", "limit_check", "limit_checks", "limit_warnings",
-           "RatingCase", "RatingResult", "analyse_rating"]
+           "RatingCase", "rating_case", "RatingResult", "analyse_rating", "CURVE_FRACTIONS"]
 
 #: Lundberg-Palmgren exponents of point contact: stress c, depth h, Weibull slope e; they
 #: give the load-life exponent (c - h + 2) / (3 e) = 3.
@@ -623,6 +623,215 @@ def _variants(design: PRSDesign, model: LoadModel, equal_lists: tuple[Sequence[f
     return out
 
 
+@dataclass(frozen=True)
+class _Capacity:
+    """Load ratings of the contact rings (N), the reliability factor a_1, the operating factor
+    f_w and the catalogue L10 life of the equivalent load (revolutions)."""
+
+    rings: ContactRings
+    dynamic_n: float
+    static_n: float
+    reliability_factor: float
+    operating_factor: float
+    life_revolutions: float
+
+
+def _capacity(design: PRSDesign, contact: ContactResult, model: LoadModel, case: RatingCase,
+              rs: RatingSettings) -> _Capacity:
+    """Ratings of the contact rings and the catalogue life of the duty ``case``."""
+    rings = contact_rings(design, contact, model)
+    Ca = dynamic_load_rating(rings)
+    C0a, _ = static_load_rating(rings, rs.static_pressure_limit_mpa)
+    a1 = reliability_factor(case.reliability_pct)
+    fw = case.operating_factor
+    return _Capacity(rings=rings, dynamic_n=Ca, static_n=C0a, reliability_factor=a1, operating_factor=fw,
+                     life_revolutions=life_revolutions(Ca, case.equivalent_load_n, a1, fw))
+
+
+@dataclass(frozen=True)
+class _VariantLoads:
+    """Tooth loads of every pitch variant (``names``, V of them) at the duty loads
+    ``duty_loads_n`` (C) followed by the curve loads ``curve_loads_n`` (N): ``f_nr``,
+    ``f_rs`` (V, C + K, n) N, screw-to-nut displacement from first contact
+    ``deflection_mm`` (V, C + K) and the gap closed at first contact ``first_contact_mm``
+    (V,) mm."""
+
+    names: list[str]
+    duty_loads_n: NDArray
+    curve_loads_n: NDArray
+    f_nr: NDArray
+    f_rs: NDArray
+    deflection_mm: NDArray
+    first_contact_mm: NDArray
+
+
+def _solve_variants(design: PRSDesign, model: LoadModel, case: RatingCase,
+                    variants: dict[str, tuple[NDArray, NDArray]]) -> _VariantLoads:
+    """One batched solve: every variant at every duty case and at the loads of the curves."""
+    F0 = design.loading.axial_load_n
+    names = list(variants)
+    cases = np.asarray(case.loads_n, dtype=np.float64)
+    curve = np.asarray(CURVE_FRACTIONS) * F0
+    loads_one = np.concatenate([cases, curve])
+    per = len(loads_one)
+    g_nr, g_rs = zip(*(pitch_gaps(design.thread.pitch_mm, r, nt) for r, nt in (variants[k] for k in names)))
+    # every variant is solved at the duty loads and at the curve loads: each small enough for
+    # the load model (docs: the mean tooth approach and the gaps, analysis.loads.check_load_scale)
+    gap_pairs = list(zip(g_nr, g_rs))
+    low = int(np.argmin(cases))
+    check_load_scale(design, model, float(cases[low]), case.load_field,
+                     float(cases[low]) if case.load_field != "loading.axial_load_n" else F0, gaps=gap_pairs)
+    check_load_scale(design, model, float(curve.min()), gaps=gap_pairs, min_approach=False)
+    G_nr = np.repeat(np.stack(g_nr), per, axis=0)
+    G_rs = np.repeat(np.stack(g_rs), per, axis=0)
+    b = solve_loads_batch(model, np.tile(loads_one, len(names)), G_nr, G_rs)
+    # screw-to-nut displacement from first contact: at zero load the approach of a side can
+    # reach min_j g_j (the first tooth to touch; 0 for constant pitch), not 0 (graded gaps)
+    first = np.array([gn.min() + gr.min() for gn, gr in zip(g_nr, g_rs)])
+    return _VariantLoads(names=names, duty_loads_n=cases, curve_loads_n=curve,
+                         f_nr=b.f_nr.reshape(len(names), per, -1), f_rs=b.f_rs.reshape(len(names), per, -1),
+                         deflection_mm=b.axial_deflection_mm.reshape(len(names), per) - first[:, None],
+                         first_contact_mm=first)
+
+
+@dataclass(frozen=True)
+class _DistributionLife:
+    """Per variant: life, pressures and static safety at the duty (``dist``, the report's
+    ``distribution_life`` entries), the system life at the curve loads ``life_curve`` (V, K)
+    (revolutions) and the largest duty load ``max_load_n`` (N)."""
+
+    dist: dict[str, dict[str, Any]]
+    life_curve: NDArray
+    max_load_n: float
+
+
+def _distribution_life(design: PRSDesign, case: RatingCase, rs: RatingSettings, cap: _Capacity,
+                       solved: _VariantLoads) -> _DistributionLife:
+    """L10 life from the actual tooth loads of every variant, its Hertz pressures and static
+    safety at the largest duty load, and its gain over constant pitch."""
+    rings, names, cases = cap.rings, solved.names, solved.duty_loads_n
+    f_nr, f_rs = solved.f_nr, solved.f_rs
+    F0 = design.loading.axial_load_n
+    C = len(cases)
+    w = np.asarray(case.weights)
+    rev_factor = cap.reliability_factor * 1e6 / cap.operating_factor ** 3          # loads x f_w: life / f_w^3
+    life_dist = system_life(rings, f_rs[:, :C], f_nr[:, :C], w) * rev_factor
+    life_curve = system_life(rings, f_rs[:, C:], f_nr[:, C:]) * rev_factor      # (V, K)
+    n_m = case.equivalent_speed_rpm
+    k_max = int(np.argmax(cases))
+    low = int(np.argmin(cases))
+    dist = {}
+    for i, k in enumerate(names):
+        # static check at the largest load of the duty, as catalogues do (no f_w)
+        p_rs = hertz_pressure(rings, 0, f_rs[i, k_max])
+        p_nr = hertz_pressure(rings, 1, f_nr[i, k_max])
+        p_max = float(max(p_rs.max(), p_nr.max()))
+        dist[k] = {"l10_revolutions": float(life_dist[i]), "l10_hours": life_hours(float(life_dist[i]), n_m),
+                   "life_ratio_to_equal_sharing": float(life_dist[i] / cap.life_revolutions),
+                   "max_hertz_pressure_mpa": p_max,
+                   "static_safety": (rs.static_pressure_limit_mpa / p_max) ** 3,
+                   "hertz_pressure_mpa": {"roller_screw": p_rs.tolist(), "nut_roller": p_nr.tolist()}}
+    for k in names:
+        for key in ("l10_revolutions", "l10_hours", "static_safety"):
+            _finite(dist[k][key], case.load_field, float(cases[low]) if case.load_field != "loading.axial_load_n"
+                    else F0, f"gives a {key} of {dist[k][key]!r} ({k} pitch lists) out of floating-point range")
+    const_h = dist["constant_pitch"]["l10_hours"]
+    for k in names:
+        dist[k]["gain_over_constant_pitch_hours"] = dist[k]["l10_hours"] - const_h
+        dist[k]["gain_factor_over_constant_pitch"] = dist[k]["l10_hours"] / const_h
+    return _DistributionLife(dist=dist, life_curve=life_curve, max_load_n=float(cases[k_max]))
+
+
+@dataclass(frozen=True)
+class _Stiffness:
+    """Axial stiffness of the design as built (pitch lists ``pitch_lists``): single nut at the
+    curve loads ``load_n`` (N) with displacement ``deflection_mm``, secant and tangent
+    stiffness (N/um); preloaded double nut (:func:`double_nut` result ``double_nut``) at the
+    external loads ``external_n`` with displacement ``displacement_mm``, stiffness
+    ``double_nut_stiffness`` (N/um) and the single nut's displacement at those loads
+    ``single_displacement_mm``."""
+
+    pitch_lists: str
+    load_n: NDArray
+    deflection_mm: NDArray
+    secant: NDArray
+    tangent: NDArray
+    preload_n: float
+    double_nut: dict[str, Any]
+    external_n: NDArray
+    displacement_mm: NDArray
+    double_nut_stiffness: NDArray
+    single_displacement_mm: NDArray
+
+
+def _stiffness(design: PRSDesign, model: LoadModel, rs: RatingSettings,
+               variants: dict[str, tuple[NDArray, NDArray]], solved: _VariantLoads) -> _Stiffness:
+    """Stiffness of the design as built (its own lists: constant pitch unless graded), single
+    and with a preloaded double nut."""
+    F0 = design.loading.axial_load_n
+    names, C = solved.names, len(solved.duty_loads_n)
+    own = ("design" if "design" in names else "equal_load") if design.graded else "constant_pitch"
+    io = names.index(own)
+    Fc, dc = solved.curve_loads_n, solved.deflection_mm[io, C:]
+    preload = rs.preload_n if rs.preload_n is not None else F0 / 2.0 ** 1.5
+    grid_top = max(1.6 * F0, 3.2 * preload)
+    Fg = grid_top * np.linspace(0.0, 1.0, 41) ** 1.5          # uniform in F^(2/3): dense at low load
+    Fg_solve = Fg[1:]
+    rr, nn = variants[own]
+    gn, gr = pitch_gaps(design.thread.pitch_mm, rr, nn)
+    preload_field = "rating.preload_n" if rs.preload_n is not None else "loading.axial_load_n"
+    check_load_scale(design, model, float(Fg_solve[0]), preload_field,
+                     rs.preload_n if rs.preload_n is not None else F0, gaps=[(gn, gr)], min_approach=False)
+    bg = solve_loads_batch(model, Fg_solve, np.tile(gn, (len(Fg_solve), 1)), np.tile(gr, (len(Fg_solve), 1)))
+    dg = np.concatenate([[0.0], bg.axial_deflection_mm - solved.first_contact_mm[io]])
+    ext = np.linspace(0.0, 1.5 * F0, 61)
+    dn = double_nut(Fg, dg, preload, ext)
+    x = dn["displacement_mm"]
+    return _Stiffness(pitch_lists=own, load_n=Fc, deflection_mm=dc, secant=Fc / dc / 1e3,
+                      tangent=np.gradient(Fc, dc) / 1e3, preload_n=preload, double_nut=dn, external_n=ext,
+                      displacement_mm=x, double_nut_stiffness=np.gradient(ext, x) / 1e3,
+                      single_displacement_mm=PchipInterpolator(np.cbrt(Fg) ** 2, dg)(np.cbrt(ext) ** 2))
+
+
+@dataclass(frozen=True)
+class _Limits:
+    """Speed and buckling limits and the drive: free screw length and root diameter (mm),
+    critical speed, d n speed limit and permissible speed (rpm), buckling load (N), lead
+    (mm), :func:`efficiency` result, drive and back-drive torque at the largest load (N m)."""
+
+    free_length_mm: float
+    root_diameter_mm: float
+    critical_speed_rpm: float
+    buckling_load_n: float
+    dn_speed_limit_rpm: float
+    permissible_speed_rpm: float
+    lead_mm: float
+    efficiency: dict[str, float]
+    drive_torque_nm: float
+    back_drive_torque_nm: float
+
+
+def _limits(design: PRSDesign, rs: RatingSettings, sup: Supports, max_load_n: float) -> _Limits:
+    """Critical speed, buckling, speed limits, efficiency and torques."""
+    E_s = design.materials.screw.youngs_modulus_mpa
+    d_root = design.screw.minor_diameter_mm
+    L_free = sup.unsupported_length_mm if sup.unsupported_length_mm is not None else design.screw.length_mm
+    L_field = "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None else "screw.length_mm"
+    n_cr = _finite(lambda: critical_speed(d_root, L_free, sup.critical_speed_ends, E_s), L_field, L_free,
+                   "gives a critical speed out of floating-point range")
+    F_buck = _finite(lambda: buckling_load(d_root, L_free, sup.buckling_ends, E_s), L_field, L_free,
+                     "gives a buckling load out of floating-point range")
+    n_dn = rs.dn_limit_mm_rpm / design.screw.pitch_diameter_mm
+    n_perm = min(sup.critical_speed_factor * n_cr, n_dn)
+    lead = design.screw.starts * design.thread.pitch_mm
+    eff = efficiency(lead, design.screw.pitch_diameter_mm, rs.friction_coefficient, design.thread.beta)
+    T_back = max_load_n * lead * eff["back_driving"] / (2.0 * math.pi) / 1e3
+    return _Limits(free_length_mm=L_free, root_diameter_mm=d_root, critical_speed_rpm=n_cr,
+                   buckling_load_n=F_buck, dn_speed_limit_rpm=n_dn, permissible_speed_rpm=n_perm, lead_mm=lead,
+                   efficiency=eff, drive_torque_nm=drive_torque(max_load_n, lead, eff["forward"]),
+                   back_drive_torque_nm=T_back)
+
+
 def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, model: LoadModel | None = None,
                    case: RatingCase | None = None, *, equal_lists: tuple[Sequence[float], Sequence[float]] | None = None,
                    robust_lists: tuple[Sequence[float], Sequence[float]] | None = None,
@@ -640,105 +849,31 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     case = case if case is not None else rating_case(design)
     rs = design.rating or RatingSettings()
     sup = design.supports or Supports()
-    rings = contact_rings(design, contact, model)
-    Ca = dynamic_load_rating(rings)
-    C0a, _ = static_load_rating(rings, rs.static_pressure_limit_mpa)
-    a1 = reliability_factor(case.reliability_pct)
-    fw = case.operating_factor
-    L_rev = life_revolutions(Ca, case.equivalent_load_n, a1, fw)
-    F0 = design.loading.axial_load_n
-
-    # one batched solve: every variant at every duty case and at the loads of the curves
+    cap = _capacity(design, contact, model, case, rs)
     variants = _variants(design, model, equal_lists, robust_lists)
-    names = list(variants)
-    cases = np.asarray(case.loads_n, dtype=np.float64)
-    curve = np.asarray(CURVE_FRACTIONS) * F0
-    loads_one = np.concatenate([cases, curve])
-    per = len(loads_one)
-    g_nr, g_rs = zip(*(pitch_gaps(design.thread.pitch_mm, r, nt) for r, nt in (variants[k] for k in names)))
-    # every variant is solved at the duty loads and at the curve loads: each small enough for
-    # the load model (docs: the mean tooth approach and the gaps, analysis.loads.check_load_scale)
-    gap_pairs = list(zip(g_nr, g_rs))
-    low = int(np.argmin(cases))
-    check_load_scale(design, model, float(cases[low]), case.load_field,
-                     float(cases[low]) if case.load_field != "loading.axial_load_n" else F0, gaps=gap_pairs)
-    check_load_scale(design, model, float(curve.min()), gaps=gap_pairs, min_approach=False)
-    G_nr = np.repeat(np.stack(g_nr), per, axis=0)
-    G_rs = np.repeat(np.stack(g_rs), per, axis=0)
-    b = solve_loads_batch(model, np.tile(loads_one, len(names)), G_nr, G_rs)
-    f_nr = b.f_nr.reshape(len(names), per, -1)
-    f_rs = b.f_rs.reshape(len(names), per, -1)
-    # screw-to-nut displacement from first contact: at zero load the approach of a side can
-    # reach min_j g_j (the first tooth to touch; 0 for constant pitch), not 0 (graded gaps)
-    first = np.array([gn.min() + gr.min() for gn, gr in zip(g_nr, g_rs)])
-    defl = b.axial_deflection_mm.reshape(len(names), per) - first[:, None]
-    C = len(cases)
-    w = np.asarray(case.weights)
-    rev_factor = a1 * 1e6 / fw ** 3          # loads x f_w: life / f_w^3
-    life_dist = system_life(rings, f_rs[:, :C], f_nr[:, :C], w) * rev_factor
-    life_curve = system_life(rings, f_rs[:, C:], f_nr[:, C:]) * rev_factor      # (V, K)
-    n_m = case.equivalent_speed_rpm
-    k_max = int(np.argmax(cases))
-    Fmax = float(cases[k_max])
-    dist = {}
-    for i, k in enumerate(names):
-        # static check at the largest load of the duty, as catalogues do (no f_w)
-        p_rs = hertz_pressure(rings, 0, f_rs[i, k_max])
-        p_nr = hertz_pressure(rings, 1, f_nr[i, k_max])
-        p_max = float(max(p_rs.max(), p_nr.max()))
-        dist[k] = {"l10_revolutions": float(life_dist[i]), "l10_hours": life_hours(float(life_dist[i]), n_m),
-                   "life_ratio_to_equal_sharing": float(life_dist[i] / L_rev),
-                   "max_hertz_pressure_mpa": p_max,
-                   "static_safety": (rs.static_pressure_limit_mpa / p_max) ** 3,
-                   "hertz_pressure_mpa": {"roller_screw": p_rs.tolist(), "nut_roller": p_nr.tolist()}}
-    for k in names:
-        for key in ("l10_revolutions", "l10_hours", "static_safety"):
-            _finite(dist[k][key], case.load_field, float(cases[low]) if case.load_field != "loading.axial_load_n"
-                    else F0, f"gives a {key} of {dist[k][key]!r} ({k} pitch lists) out of floating-point range")
-    const_h = dist["constant_pitch"]["l10_hours"]
-    for k in names:
-        dist[k]["gain_over_constant_pitch_hours"] = dist[k]["l10_hours"] - const_h
-        dist[k]["gain_factor_over_constant_pitch"] = dist[k]["l10_hours"] / const_h
+    solved = _solve_variants(design, model, case, variants)
+    life = _distribution_life(design, case, rs, cap, solved)
+    stiff = _stiffness(design, model, rs, variants, solved)
+    limits = _limits(design, rs, sup, life.max_load_n)
+    return _rating_result(design, case, rs, sup, cap, solved, life, stiff, limits, robust_note)
 
-    # stiffness of the design as built (its own lists: constant pitch unless graded)
-    own = ("design" if "design" in names else "equal_load") if design.graded else "constant_pitch"
-    io = names.index(own)
-    Fc, dc = curve, defl[io, C:]
-    sec = Fc / dc / 1e3
-    tan = np.gradient(Fc, dc) / 1e3
-    preload = rs.preload_n if rs.preload_n is not None else F0 / 2.0 ** 1.5
-    grid_top = max(1.6 * F0, 3.2 * preload)
-    Fg = grid_top * np.linspace(0.0, 1.0, 41) ** 1.5          # uniform in F^(2/3): dense at low load
-    Fg_solve = Fg[1:]
-    rr, nn = variants[own]
-    gn, gr = pitch_gaps(design.thread.pitch_mm, rr, nn)
-    preload_field = "rating.preload_n" if rs.preload_n is not None else "loading.axial_load_n"
-    check_load_scale(design, model, float(Fg_solve[0]), preload_field,
-                     rs.preload_n if rs.preload_n is not None else F0, gaps=[(gn, gr)], min_approach=False)
-    bg = solve_loads_batch(model, Fg_solve, np.tile(gn, (len(Fg_solve), 1)), np.tile(gr, (len(Fg_solve), 1)))
-    dg = np.concatenate([[0.0], bg.axial_deflection_mm - first[io]])
-    ext = np.linspace(0.0, 1.5 * F0, 61)
-    dn = double_nut(Fg, dg, preload, ext)
-    x = dn["displacement_mm"]
-    k_dn = np.gradient(ext, x) / 1e3
-    single_x = PchipInterpolator(np.cbrt(Fg) ** 2, dg)(np.cbrt(ext) ** 2)
 
-    # limits
-    E_s = design.materials.screw.youngs_modulus_mpa
-    d_root = design.screw.minor_diameter_mm
-    L_free = sup.unsupported_length_mm if sup.unsupported_length_mm is not None else design.screw.length_mm
-    L_field = "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None else "screw.length_mm"
-    n_cr = _finite(lambda: critical_speed(d_root, L_free, sup.critical_speed_ends, E_s), L_field, L_free,
-                   "gives a critical speed out of floating-point range")
-    F_buck = _finite(lambda: buckling_load(d_root, L_free, sup.buckling_ends, E_s), L_field, L_free,
-                     "gives a buckling load out of floating-point range")
-    n_dn = rs.dn_limit_mm_rpm / design.screw.pitch_diameter_mm
-    n_perm = min(sup.critical_speed_factor * n_cr, n_dn)
-    lead = design.screw.starts * design.thread.pitch_mm
-    eff = efficiency(lead, design.screw.pitch_diameter_mm, rs.friction_coefficient, design.thread.beta)
-    T_drive = drive_torque(Fmax, lead, eff["forward"])
-    T_back = Fmax * lead * eff["back_driving"] / (2.0 * math.pi) / 1e3
-
+def _rating_result(design: PRSDesign, case: RatingCase, rs: RatingSettings, sup: Supports, cap: _Capacity,
+                   solved: _VariantLoads, life: _DistributionLife, stiff: _Stiffness, limits: _Limits,
+                   robust_note: str | None) -> RatingResult:
+    """The ``rating`` section of report.json and the plot curves from the computed steps."""
+    rings, Ca, C0a, a1, fw, L_rev = (cap.rings, cap.dynamic_n, cap.static_n, cap.reliability_factor,
+                                     cap.operating_factor, cap.life_revolutions)
+    names, cases, curve, w = solved.names, solved.duty_loads_n, solved.curve_loads_n, np.asarray(case.weights)
+    dist, life_curve, Fmax, n_m = life.dist, life.life_curve, life.max_load_n, case.equivalent_speed_rpm
+    own, Fc, dc, sec, tan, preload = (stiff.pitch_lists, stiff.load_n, stiff.deflection_mm, stiff.secant,
+                                      stiff.tangent, stiff.preload_n)
+    dn, ext, x, k_dn, single_x = (stiff.double_nut, stiff.external_n, stiff.displacement_mm,
+                                  stiff.double_nut_stiffness, stiff.single_displacement_mm)
+    L_free, d_root, n_cr, F_buck, n_dn, n_perm = (limits.free_length_mm, limits.root_diameter_mm,
+                                                  limits.critical_speed_rpm, limits.buckling_load_n,
+                                                  limits.dn_speed_limit_rpm, limits.permissible_speed_rpm)
+    eff, lead, T_drive, T_back = limits.efficiency, limits.lead_mm, limits.drive_torque_nm, limits.back_drive_torque_nm
     section = {
         "method": ("Lundberg-Palmgren point contact per tooth-contact ring (docs/theory/ratings.md): constant "
                    "calibrated on the closed-form ball-raceway capacity 98.1 (N, mm) of ISO 281 / ISO 3408-5"),

@@ -37,6 +37,8 @@ from numpy.typing import NDArray
 from prs_geom.analysis.loads import PitchDesign
 from prs_geom.model.design import PRSDesign
 
+__all__ = ["PitchFamily", "weighted_quantile"]
+
 
 @dataclass(frozen=True)
 class PitchFamily:

@@ -54,6 +54,11 @@ from prs_geom.analysis.loads import check_load_scale, gap_terms_rollers
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
 
+__all__ = ["TERMS", "GROUPS", "QUANTILES", "ErrorModel", "error_model", "StudyProblem", "study_problem",
+           "SampleStats", "solve_samples", "evaluate", "ChunkTask", "run_chunk", "summary",
+           "clopper_pearson_lower", "quantile_upper_bound", "variance_shares", "linear_influence",
+           "linear_moments", "flank_influence", "allocation_weights"]
+
 #: The error terms, in the order of the columns of :meth:`ErrorModel.gap_map`.
 TERMS = ("screw_flank", "roller_screw_flank", "roller_nut_flank", "nut_flank", "roller_diameter",
          "screw_eccentricity", "nut_eccentricity", "lead", "temperature")

@@ -3,7 +3,7 @@
 Why these two
 -------------
 The load model counts the contact deformation with Hertz's point-contact approach
-(:func:`prs_geom.analysis.loads.hertz_constant`), the approach of points *far* from the
+(:mod:`prs_geom.analysis.hertz`), the approach of points *far* from the
 contact ellipse, and the tooth deformation separately. A ring load spread over the Hertz
 width on an axisymmetric flank has, next to the tooth's structural deformation, a local
 indentation of its own: the plane-strain compression between the loaded band and the
@@ -39,9 +39,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, special
+from scipy import integrate
 
-from prs_geom.analysis.loads import ellipticity
+from prs_geom.analysis.hertz import hertz_contact
 
 __all__ = ["HertzEllipse", "hertz_semi_axes", "band_weight", "local_term"]
 
@@ -79,11 +79,11 @@ class HertzEllipse:
 
 def hertz_semi_axes(meridian_curvatures: tuple[float, float], circumferential_curvatures: tuple[float, float],
                     eta: float, normal_load: float) -> HertzEllipse:
-    """Semi-axes of the Hertz ellipse (Harris' form, the same k as the load model).
+    """Semi-axes of the Hertz ellipse (:func:`prs_geom.analysis.hertz.hertz_contact`, the
+    same constants as the load model's Hertz approach).
 
-    a = (2 k^2 E(e) / pi)^(1/3) (3 Q eta / (2 sum_rho))^(1/3), b = a / k, with k from
-    :func:`prs_geom.analysis.loads.ellipticity`; the major axis a lies in the plane with the
-    smaller curvature sum.
+    a = (2 k^2 E(e) / pi)^(1/3) (3 Q eta / (2 sum_rho))^(1/3), b = a / k; the major axis a
+    lies in the plane with the smaller curvature sum.
 
     Parameters
     ----------
@@ -95,19 +95,13 @@ def hertz_semi_axes(meridian_curvatures: tuple[float, float], circumferential_cu
     normal_load : float
         Q (N).
     """
-    s_m = sum(meridian_curvatures)
-    s_c = sum(circumferential_curvatures)
-    sum_rho = s_m + s_c
-    if not (s_m > 0 and s_c > 0):
+    if not (sum(meridian_curvatures) > 0 and sum(circumferential_curvatures) > 0):
         raise ValueError("both curvature sums must be positive")
     (r11, r21), (r12, r22) = meridian_curvatures, circumferential_curvatures
-    F_rho = (abs(r11 - r12) + abs(r21 - r22)) / sum_rho
-    k = ellipticity(F_rho)
-    E = float(special.ellipe(1.0 - 1.0 / (k * k)))
-    a = (2.0 * k * k * E / math.pi) ** (1.0 / 3.0) * (3.0 * normal_load * eta / (2.0 * sum_rho)) ** (1.0 / 3.0)
-    b = a / k
-    merid, circ = (a, b) if s_m <= s_c else (b, a)
-    return HertzEllipse(normal_load, merid, circ, k)
+    contact = hertz_contact((r11, r12, r21, r22), eta)
+    a, b = contact.semi_axes(normal_load)
+    merid, circ = (a, b) if contact.major_in_plane_1 else (b, a)
+    return HertzEllipse(normal_load, merid, circ, contact.ellipticity)
 
 
 def band_weight(s: np.ndarray, half_width: float) -> np.ndarray:
