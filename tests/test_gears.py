@@ -15,9 +15,8 @@ import pytest
 
 from prs_geom.geometry import gears as G
 from prs_geom.geometry.frames import carrier_angles, roller_spin
-from prs_geom.geometry.gear_checks import (internal_pair_checks, pinion_transform, standard_centre_distance,
-                                           sweep_clearance)
-from prs_geom.geometry.gear_pair import GearPair, default_gear_pair
+from prs_geom.geometry.gear_checks import internal_pair_checks, pinion_transform, standard_centre_distance
+from prs_geom.geometry.gear_pair import GearPair, default_gear_pair, sweep_clearance
 from prs_geom.geometry.gear_phasing import mesh_phase, phasing_divisible, roller_gear_phasing
 from prs_geom.geometry.gears import SpurGear, involute, inverse_involute
 from prs_geom.geometry.planar import min_clearance_2d, point_segment_distance, polygon_area, transform_2d

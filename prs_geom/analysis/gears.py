@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 
 from prs_geom.geometry.frames import carrier_angles, roller_spin
-from prs_geom.geometry.gear_checks import InternalPairChecks, SweepClearance, sweep_clearance
-from prs_geom.geometry.gear_pair import GearPair, design_gear_pair
+from prs_geom.geometry.gear_checks import InternalPairChecks, SweepClearance
+from prs_geom.geometry.gear_pair import GearPair, design_gear_pair, sweep_clearance
 from prs_geom.geometry.gear_phasing import RollerGearPhasing, phasing_divisible, roller_gear_phasing
 from prs_geom.geometry.gears import SpurGear
 from prs_geom.model.design import PRSDesign

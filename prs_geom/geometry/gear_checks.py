@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -22,11 +20,8 @@ from prs_geom.geometry.planar import frozen_float64, min_clearance_2d, transform
 from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import positive
 
-if TYPE_CHECKING:
-    from prs_geom.geometry.gear_pair import GearPair
-
 __all__ = ["CheckResult", "InternalPairChecks", "SweepClearance", "internal_pair_checks", "pinion_transform",
-           "require_internal_pair", "standard_centre_distance", "sweep_clearance"]
+           "require_internal_pair", "standard_centre_distance"]
 
 
 @dataclass(frozen=True)
@@ -365,30 +360,4 @@ def pinion_transform(carrier_angle_rad: float, centre_distance_mm: float, spin_r
     """R_z(psi) Tr(a) R_z(chi) as a 3x3 2D transform (pinion frame -> ring frame)."""
     return (transform_2d(carrier_angle_rad) @ transform_2d(0.0, centre_distance_mm)
             @ transform_2d(spin_rad))
-
-
-def sweep_clearance(pair: GearPair, carrier_angles_rad: ArrayLike, roller_spins_rad: ArrayLike,
-                    offset_rad: float, advance_rad: ArrayLike, *, chord_tol_mm: float = 1e-3) -> SweepClearance:
-    """Run the mechanism and measure every roller gear's clearance to the ring gear.
-
-    Roller k at carrier advance t: centre on the ray psi_k + t at the pair's centre distance,
-    gear spin (from the line of centres) chi_k + offset - (z_ring / z_g) t: the rolling
-    relation of the gears (and of the threads, n_n = z_ring / z_g). The ring is fixed in its
-    own frame (tooth 0 on +x).
-    """
-    psi = np.atleast_1d(np.asarray(carrier_angles_rad, dtype=float))
-    chi = np.atleast_1d(np.asarray(roller_spins_rad, dtype=float))
-    adv = np.atleast_1d(np.asarray(advance_rad, dtype=float))
-    P = pair.pinion.outline(chord_tol_mm)
-    Rg = pair.ring.outline(chord_tol_mm)
-    I3 = np.eye(3)
-    ratio = pair.ring.teeth / pair.pinion.teeth
-    cl = np.empty((len(psi), len(adv)))
-    ov = np.empty((len(psi), len(adv)), dtype=bool)
-    for k in range(len(psi)):
-        for s, t in enumerate(adv):
-            T = pinion_transform(psi[k] + t, pair.centre_distance_mm, chi[k] + offset_rad - ratio * t)
-            r = min_clearance_2d(P, T, Rg, I3, b_material_inside=False)
-            cl[k, s], ov[k, s] = r.distance_mm, r.overlap
-    return SweepClearance(advance_rad=frozen_float64(adv), clearance_mm=frozen_float64(cl), overlap=frozen_float64(ov))
 

@@ -12,13 +12,18 @@ import math
 from dataclasses import dataclass, field
 from typing import Sequence
 
-from prs_geom.geometry.gear_checks import InternalPairChecks, internal_pair_checks, require_internal_pair
+import numpy as np
+from numpy.typing import ArrayLike
+
+from prs_geom.geometry.gear_checks import (InternalPairChecks, SweepClearance, internal_pair_checks, pinion_transform,
+                                           require_internal_pair)
 from prs_geom.geometry.gears import DEFAULT_FACE_WIDTH_MM, SpurGear
+from prs_geom.geometry.planar import frozen_float64, min_clearance_2d
 from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import positive, real
 
 __all__ = ["DEFAULT_TOTAL_BACKLASH_MM", "GearPair", "ISO54_MODULES_MM", "RING_ADDENDUM_STEPS", "default_gear_pair",
-           "design_gear_pair", "ring_gear_outer_radius"]
+           "design_gear_pair", "ring_gear_outer_radius", "sweep_clearance"]
 
 #: Standard modules (mm), ascending, that the default sizing picks from: ISO 54:1996 first
 #: choice from 1 mm, and below 1 mm the values 0.3, 0.4, 0.5, 0.6, 0.8 of the fine-module
@@ -229,3 +234,29 @@ def ring_gear_outer_radius(design, pair: GearPair) -> float:
     circle to the nut body (an outer cylinder flush with the nut's would meet its
     differently sampled polygon in slivers when the nut's parts are united)."""
     return 0.5 * (pair.ring.root_radius_mm + 0.5 * design.nut.outer_diameter_mm)
+
+
+def sweep_clearance(pair: GearPair, carrier_angles_rad: ArrayLike, roller_spins_rad: ArrayLike,
+                    offset_rad: float, advance_rad: ArrayLike, *, chord_tol_mm: float = 1e-3) -> SweepClearance:
+    """Run the mechanism and measure every roller gear's clearance to the ring gear.
+
+    Roller k at carrier advance t: centre on the ray psi_k + t at the pair's centre distance,
+    gear spin (from the line of centres) chi_k + offset - (z_ring / z_g) t: the rolling
+    relation of the gears (and of the threads, n_n = z_ring / z_g). The ring is fixed in its
+    own frame (tooth 0 on +x).
+    """
+    psi = np.atleast_1d(np.asarray(carrier_angles_rad, dtype=float))
+    chi = np.atleast_1d(np.asarray(roller_spins_rad, dtype=float))
+    adv = np.atleast_1d(np.asarray(advance_rad, dtype=float))
+    P = pair.pinion.outline(chord_tol_mm)
+    Rg = pair.ring.outline(chord_tol_mm)
+    I3 = np.eye(3)
+    ratio = pair.ring.teeth / pair.pinion.teeth
+    cl = np.empty((len(psi), len(adv)))
+    ov = np.empty((len(psi), len(adv)), dtype=bool)
+    for k in range(len(psi)):
+        for s, t in enumerate(adv):
+            T = pinion_transform(psi[k] + t, pair.centre_distance_mm, chi[k] + offset_rad - ratio * t)
+            r = min_clearance_2d(P, T, Rg, I3, b_material_inside=False)
+            cl[k, s], ov[k, s] = r.distance_mm, r.overlap
+    return SweepClearance(advance_rad=frozen_float64(adv), clearance_mm=frozen_float64(cl), overlap=frozen_float64(ov))
