@@ -133,7 +133,7 @@ def short(design, teeth: int):
 
 def check_part(design, s, tm, tol: float) -> None:
     """The checks every exported part must pass, against independent references."""
-    from prs_geom.exports.step import DEVIATION_SHARE
+    from prs_geom.mesh.bspline_bands import DEVIATION_SHARE
 
     assert s.valid, s.reason
     assert brep_valid(s.shape)
@@ -277,12 +277,13 @@ def test_left_hand_roller_is_the_mirror_image(ocp):
 def test_an_invalid_part_is_reported_and_not_written(ocp, tmp_path, monkeypatch):
     """A part that fails a check comes back valid=False with the reason; the file is not
     written at all when no part is valid, and without the invalid part otherwise."""
+    import prs_geom.checks.brep as brep
     import prs_geom.exports.step as step
 
     d = short(default_design(), 3)
     good = step.step_solid(d, "roller")
     assert good.valid
-    monkeypatch.setattr(step, "VOLUME_REL_LIMIT", 1e-12)    # no B-rep meets this
+    monkeypatch.setattr(brep, "VOLUME_REL_LIMIT", 1e-12)    # no B-rep meets this
     bad = step.step_solid(d, "roller")
     assert not bad.valid and "volume" in bad.reason and "mesh" in bad.reason
     row = bad.report()
@@ -377,7 +378,7 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)
     # the mechanism parts are exact B-reps: volume read back = the closed form of the true
     # circles (docs/theory/mechanism.md), which their polygon meshes approach within 0.1 %
-    from prs_geom.exports.step import shape_volume
+    from prs_geom.checks.brep import shape_volume
     from prs_geom.geometry.mechanism import layout
 
     lay = layout(d)
