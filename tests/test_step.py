@@ -388,3 +388,39 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         row = report["step"]["parts"][part]
         assert row["analytic_volume_mm3"] == pytest.approx(exact, rel=1e-12)
         assert abs(row["volume_mm3"] - row["mesh_volume_mm3"]) <= 1e-3 * exact
+
+
+def _unchecked_solid(part: str = "roller"):
+    """A StepSolid marked valid without a shape: for tests that stub the writer."""
+    from prs_geom.exports.step import StepSolid
+
+    return StepSolid(part=part, shape=None, valid=True, reason="", volume_mm3=1.0, mesh_volume_mm3=1.0,
+                     volume_rel_diff=0.0, bbox=(0.0,) * 6, build_time_s=0.0, faces=0)
+
+
+def test_a_step_write_that_fails_midway_leaves_no_file(ocp, tmp_path, monkeypatch):
+    """The STEP writer dying after writing part of the file leaves neither the target nor a
+    temporary file; so does a file that fails the read-back check."""
+    import prs_geom.exports.step as step
+
+    def half_then_fail(path, solids, target):
+        Path(path).write_text("ISO-10303-21;\nHEADER;\n", encoding="ascii")
+        raise RuntimeError("the STEP writer refused the shapes")
+
+    with monkeypatch.context() as m:
+        m.setattr(step, "_write_file", half_then_fail)
+        with pytest.raises(RuntimeError, match="refused"):
+            step.write_solids([_unchecked_solid()], tmp_path / "roller.step")
+    assert list(tmp_path.iterdir()) == []
+
+    def written(path, solids, target):
+        Path(path).write_text("ISO-10303-21;\n", encoding="ascii")
+
+    with monkeypatch.context() as m:
+        m.setattr(step, "_write_file", written)
+        m.setattr(step, "read_step", lambda path: step.StepFileContent(names=(), shapes=(), schema="", description=()))
+        section = step.write_solids([_unchecked_solid()], tmp_path / "roller.step")
+    assert section["file"] is None and section["written"] == []
+    assert section["reread_problems"] == ["the roller is missing by name in the file read back"]
+    assert section["parts"]["roller"]["reread_name"] is False
+    assert list(tmp_path.iterdir()) == []

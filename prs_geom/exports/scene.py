@@ -31,7 +31,6 @@ import hashlib
 import json
 import locale
 import math
-import os
 import struct
 import uuid
 from contextlib import contextmanager
@@ -43,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom._version import __version__
+from prs_geom.model.io import atomic_path, write_file_atomic
 
 #: Corners whose adjacent faces bend by more than this share no normal (deg).
 SHARP_EDGE_DEG = 30.0
@@ -512,7 +512,9 @@ def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
 
 
 def write_glb(scene: Scene, path: Path | str) -> None:
-    Path(path).write_bytes(glb_bytes(scene))
+    """Write the scene as ``.glb`` (:func:`glb_bytes`), atomically
+    (:func:`prs_geom.model.io.write_file_atomic`)."""
+    write_file_atomic(path, glb_bytes(scene))
 
 
 # --------------------------------------------------------------------------- 3MF
@@ -521,7 +523,9 @@ def _uuid(*parts: str) -> str:
 
 
 def write_3mf(scene: Scene, path: Path | str) -> None:
-    """Write the scene as 3MF with lib3mf (unit millimetre; see the module docstring)."""
+    """Write the scene as 3MF with lib3mf (unit millimetre; see the module docstring),
+    atomically (:func:`prs_geom.model.io.atomic_path`): ``path`` is never half-written and no
+    temporary file is left behind."""
     import lib3mf
 
     wrapper = lib3mf.get_wrapper()
@@ -559,12 +563,16 @@ def write_3mf(scene: Scene, path: Path | str) -> None:
     meta = model.GetMetaDataGroup()
     meta.AddMetaData("", "Title", scene.title or "prs_geom assembly", "string", True)
     meta.AddMetaData("", "Application", f"prs_geom {__version__}", "string", True)
+    with atomic_path(path) as tmp:
+        _write_model(model, tmp)
+
+
+def _write_model(model: Any, path: Path) -> None:
+    """lib3mf's 3MF writer on ``model``, to ``path``, coordinates to 9 decimals."""
     writer = model.QueryWriter("3mf")
     writer.SetDecimalPrecision(9)
-    tmp = Path(path).with_name(Path(path).name + ".part")
     with _locale_kept():
-        writer.WriteToFile(str(tmp))
-    os.replace(tmp, path)
+        writer.WriteToFile(str(path))
 
 
 @contextmanager

@@ -25,7 +25,6 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-import secrets
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +39,7 @@ from prs_geom.mesh.bspline_bands import (DEGREE, BandFit, BSplineNet, ThreadSoli
                                          sampled_bbox, thread_solid_reference)
 from prs_geom.mesh.mechanism_solids import Cylinder, CylinderSolid, mechanism_part_mesh, mechanism_solid
 from prs_geom.model.errors import EnvironmentFailure
+from prs_geom.model.io import atomic_path
 
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.geometry.profiles import ThreadProfile
@@ -617,13 +617,22 @@ def _step_section(solids: Sequence[StepSolid]) -> dict[str, Any]:
     }
 
 
+class _RereadRejected(Exception):
+    """The file read back differs from the solids written (the temporary file is dropped)."""
+
+    def __init__(self, problems: list[str]) -> None:
+        super().__init__("; ".join(problems))
+        self.problems = problems
+
+
 def write_solids(solids: Sequence[StepSolid], path: str | os.PathLike) -> dict[str, Any]:
     """Write the valid ``solids`` to one STEP AP214 file, read it back and check it.
 
-    The file is written to a hidden sibling, read back (:func:`read_step`): every written
-    part must be there by name with OpenCascade's bounding box unchanged
-    (:func:`prs_geom.checks.brep.reread_problems`); only then is it moved into place
-    (``os.replace``), so ``path`` is never left half-written or holding a broken file.
+    The file is written to a hidden sibling (:func:`prs_geom.model.io.atomic_path`) and read
+    back (:func:`read_step`): every written part must be there by name with OpenCascade's
+    bounding box unchanged (:func:`prs_geom.checks.brep.reread_problems`); only then is it
+    moved into place, so ``path`` is never left half-written or holding a broken file, and no
+    temporary file is left behind, whatever fails.
 
     Parameters
     ----------
@@ -648,21 +657,17 @@ def write_solids(solids: Sequence[StepSolid], path: str | os.PathLike) -> dict[s
     section = _step_section(solids)
     if not good:
         return section
-    # a hidden sibling (same folder, so os.replace is atomic), created by the writer itself
-    # with the usual permissions
-    tmp: str | None = str(path.with_name(f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}"))
     try:
-        _write_file(tmp, good, path)
-        back = read_step(tmp)
-        problems = reread_problems([(s.part, s.shape) for s in good], back.names, back.shapes, section["parts"])
-        if problems:
-            section["reread_problems"] = problems
-            return section
-        os.replace(tmp, path)
-        tmp = None
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.remove(tmp)
+        # the writer creates the hidden sibling itself, with the usual permissions
+        with atomic_path(path) as tmp:
+            _write_file(str(tmp), good, path)
+            back = read_step(tmp)
+            problems = reread_problems([(s.part, s.shape) for s in good], back.names, back.shapes, section["parts"])
+            if problems:
+                raise _RereadRejected(problems)
+    except _RereadRejected as rejected:
+        section["reread_problems"] = rejected.problems
+        return section
     section["file"] = path.name
     section["written"] = [s.part for s in good]
     return section
