@@ -44,6 +44,10 @@ from numpy.typing import NDArray
 from prs_geom._version import __version__
 from prs_geom.model.io import atomic_path, write_file_atomic
 
+__all__ = ["ANIMATION_PERIOD_S", "ANIMATION_STEP_DEG", "MATERIALS", "SHARP_EDGE_DEG", "Z_UP_TO_Y_UP", "Material",
+           "Scene", "SceneAnimation", "SceneMesh", "SceneNode", "animation_angles", "assembly_scene", "glb_bytes",
+           "mechanism_animation", "moving_group", "quaternions", "split_normals", "write_3mf", "write_glb"]
+
 #: Corners whose adjacent faces bend by more than this share no normal (deg).
 SHARP_EDGE_DEG = 30.0
 #: Screw frame (z up) to glTF (y up): rotation of -90 deg about +x, as a quaternion (x, y, z, w).
@@ -184,6 +188,7 @@ def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _family(name: str) -> str:
+    """The material key of a placed part (its family: screw, roller, gear, ...)."""
     return ("gear" if "gear" in name else "retaining_ring" if name.startswith("retaining_ring")
             else name.split("_")[0])
 
@@ -519,6 +524,7 @@ def write_glb(scene: Scene, path: Path | str) -> None:
 
 # --------------------------------------------------------------------------- 3MF
 def _uuid(*parts: str) -> str:
+    """A UUID derived from ``parts`` (SHA-256), so that the 3MF file is the same bytes from run to run."""
     return str(uuid.UUID(hashlib.sha256("\0".join(parts).encode()).hexdigest()[:32]))
 
 

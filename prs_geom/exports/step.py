@@ -14,10 +14,10 @@ explains the construction, the tolerance and the limits.
 
 Construction of a threaded part (no boolean at all): each band's net becomes a
 ``Geom_BSplineSurface`` (mirrored y -> -y for a left-hand part) cut into faces of at most
-``TURNS_PER_FACE`` turns; these faces, the plane end faces bounded by the bands' iso-curves
-z = const, the nut's body cylinder and the five faces of the angular datum slot B
-(:mod:`prs_geom.geometry.datum`, a rectangular hole in face A) are sewn into one shell
-(``BRepBuilderAPI_Sewing``), made a solid and oriented outward. Every solid is in its own
+:data:`~prs_geom.mesh.bspline_bands.TURNS_PER_FACE` turns; these faces, the plane end faces
+bounded by the bands' iso-curves z = const, the nut's body cylinder and the five faces of
+the angular datum slot B (:mod:`prs_geom.geometry.datum`, a rectangular hole in face A) are
+sewn into one shell (``BRepBuilderAPI_Sewing``), made a solid and oriented outward. Every solid is in its own
 part frame (mm, z along the part axis, face A at the lower z).
 """
 from __future__ import annotations
@@ -386,8 +386,8 @@ def step_solid(design: "PRSDesign", part: str, tol: float | None = None,
         roller and nut from z = 0 to n p, the screw over ``screw_z_range``).
     tol : float, optional
         Chord tolerance (mm); ``design.mesh.chord_tolerance_mm`` when omitted. The B-spline
-        faces keep within ``DEVIATION_SHARE`` x tol of the analytic surface, tighter on
-        small parts (``deviation_target_mm``, :mod:`prs_geom.mesh.bspline_bands`), measured.
+        faces keep within :data:`~prs_geom.mesh.bspline_bands.DEVIATION_SHARE` x tol of the
+        analytic surface, tighter on small parts (``deviation_target_mm``), measured.
     screw_profile : ThreadProfile, optional
         The screw profile to build (e.g. ``theoretical_screw(design).profile``); the
         design's nominal screw when omitted.
@@ -524,7 +524,7 @@ def read_step(path: str | os.PathLike) -> StepFileContent:
     header = APIHeaderSection_MakeHeader(model)
     description = tuple(header.DescriptionValue(k).ToCString() for k in range(1, header.NbDescription() + 1))
     schema = header.SchemaIdentifiersValue(1).ToCString() if header.NbSchemaIdentifiers() else ""
-    return StepFileContent(tuple(names), tuple(shapes), schema, description)
+    return StepFileContent(names=tuple(names), shapes=tuple(shapes), schema=schema, description=description)
 
 
 def _write_file(path: str, solids: Sequence[StepSolid], target: Path) -> None:
