@@ -90,3 +90,35 @@ def test_required_static_safety_round_trips_and_defaults():
     assert "required_static_safety = 4.5" in dumps_toml(d)
     assert loads_toml(dumps_toml(d)) == d and loads_json(dumps_json(d)) == d
     assert loads_toml("[rating]\nspeed_rpm = 50\n").rating.required_static_safety == 2.0
+
+
+@pytest.mark.parametrize("content", ["new text", b"new bytes"])
+def test_an_atomic_write_that_fails_midway_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch, content):
+    """write_file_atomic: a writer that dies after writing part of the file leaves the target
+    as it was (absent, or its old content) and no temporary file in the folder."""
+    from pathlib import Path
+
+    from prs_geom.model.io import write_file_atomic
+
+    def half_then_fail(self, data, *args, **kwargs):
+        with open(self, "wb") as fh:
+            fh.write((data.encode() if isinstance(data, str) else data)[:3])
+        raise OSError("disk full")
+
+    monkeypatch.setattr(Path, "write_text", half_then_fail)
+    monkeypatch.setattr(Path, "write_bytes", half_then_fail)
+    with pytest.raises(OSError, match="disk full"):
+        write_file_atomic(tmp_path / "new.txt", content)
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    (tmp_path / "old.txt").write_text("old", encoding="utf-8")
+    monkeypatch.setattr(Path, "write_text", half_then_fail)
+    monkeypatch.setattr(Path, "write_bytes", half_then_fail)
+    with pytest.raises(OSError, match="disk full"):
+        write_file_atomic(tmp_path / "old.txt", content)
+    monkeypatch.undo()
+    assert [p.name for p in tmp_path.iterdir()] == ["old.txt"]
+    assert (tmp_path / "old.txt").read_text(encoding="utf-8") == "old"
+    write_file_atomic(tmp_path / "old.txt", content)
+    assert (tmp_path / "old.txt").read_bytes() == (content.encode() if isinstance(content, str) else content)
+    assert [p.name for p in tmp_path.iterdir()] == ["old.txt"]

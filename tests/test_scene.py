@@ -237,3 +237,43 @@ def test_assembly_stl_is_closed_and_holds_every_part(built):
         * lay.gear_face_width_mm
     assert overlap == pytest.approx(2 * exact, rel=1e-3)
     assert abs(stl.volume - (total - overlap)) <= stl.area * 4e-6, (stl.volume, total)
+
+
+def _box_scene():
+    from prs_geom.exports.scene import MATERIALS, Scene, SceneMesh, SceneNode
+
+    box = trimesh.creation.box([1, 1, 1])
+    return Scene({"box": SceneMesh("box", box.vertices, box.faces, "screw")}, {"screw": MATERIALS["screw"]},
+                 (SceneNode("box", "box"),), "atomic test")
+
+
+def test_a_scene_write_that_fails_midway_leaves_no_file(tmp_path, monkeypatch):
+    """write_glb and write_3mf write through a temporary sibling: a writer that dies after
+    writing part of the file leaves neither the target nor a temporary file."""
+    import prs_geom.exports.scene as scene_module
+
+    def half_then_fail(self, data, *args, **kwargs):
+        with open(self, "wb") as fh:
+            fh.write(data[:12])
+        raise OSError("disk full")
+
+    def model_half_then_fail(model, path):
+        Path(path).write_bytes(b"PK\x03\x04")
+        raise RuntimeError("lib3mf failed")
+
+    scene = _box_scene()
+    with monkeypatch.context() as m:
+        m.setattr(Path, "write_bytes", half_then_fail)
+        with pytest.raises(OSError, match="disk full"):
+            scene_module.write_glb(scene, tmp_path / "assembly.glb")
+    assert list(tmp_path.iterdir()) == []
+    with monkeypatch.context() as m:
+        m.setattr(scene_module, "_write_model", model_half_then_fail)
+        with pytest.raises(RuntimeError, match="lib3mf failed"):
+            scene_module.write_3mf(scene, tmp_path / "assembly.3mf")
+    assert list(tmp_path.iterdir()) == []
+    # and when nothing fails, the files and only they are there
+    scene_module.write_glb(scene, tmp_path / "assembly.glb")
+    scene_module.write_3mf(scene, tmp_path / "assembly.3mf")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["assembly.3mf", "assembly.glb"]
+    assert read_3mf(tmp_path / "assembly.3mf")["objects"]["box"][0].shape == (8, 3)

@@ -133,7 +133,7 @@ def short(design, teeth: int):
 
 def check_part(design, s, tm, tol: float) -> None:
     """The checks every exported part must pass, against independent references."""
-    from prs_geom.exports.step import DEVIATION_SHARE
+    from prs_geom.mesh.bspline_bands import DEVIATION_SHARE
 
     assert s.valid, s.reason
     assert brep_valid(s.shape)
@@ -277,12 +277,13 @@ def test_left_hand_roller_is_the_mirror_image(ocp):
 def test_an_invalid_part_is_reported_and_not_written(ocp, tmp_path, monkeypatch):
     """A part that fails a check comes back valid=False with the reason; the file is not
     written at all when no part is valid, and without the invalid part otherwise."""
+    import prs_geom.checks.brep as brep
     import prs_geom.exports.step as step
 
     d = short(default_design(), 3)
     good = step.step_solid(d, "roller")
     assert good.valid
-    monkeypatch.setattr(step, "VOLUME_REL_LIMIT", 1e-12)    # no B-rep meets this
+    monkeypatch.setattr(brep, "VOLUME_REL_LIMIT", 1e-12)    # no B-rep meets this
     bad = step.step_solid(d, "roller")
     assert not bad.valid and "volume" in bad.reason and "mesh" in bad.reason
     row = bad.report()
@@ -377,7 +378,7 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)
     # the mechanism parts are exact B-reps: volume read back = the closed form of the true
     # circles (docs/theory/mechanism.md), which their polygon meshes approach within 0.1 %
-    from prs_geom.exports.step import shape_volume
+    from prs_geom.checks.brep import shape_volume
     from prs_geom.geometry.mechanism import layout
 
     lay = layout(d)
@@ -387,3 +388,39 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         row = report["step"]["parts"][part]
         assert row["analytic_volume_mm3"] == pytest.approx(exact, rel=1e-12)
         assert abs(row["volume_mm3"] - row["mesh_volume_mm3"]) <= 1e-3 * exact
+
+
+def _unchecked_solid(part: str = "roller"):
+    """A StepSolid marked valid without a shape: for tests that stub the writer."""
+    from prs_geom.exports.step import StepSolid
+
+    return StepSolid(part=part, shape=None, valid=True, reason="", volume_mm3=1.0, mesh_volume_mm3=1.0,
+                     volume_rel_diff=0.0, bbox=(0.0,) * 6, build_time_s=0.0, faces=0)
+
+
+def test_a_step_write_that_fails_midway_leaves_no_file(ocp, tmp_path, monkeypatch):
+    """The STEP writer dying after writing part of the file leaves neither the target nor a
+    temporary file; so does a file that fails the read-back check."""
+    import prs_geom.exports.step as step
+
+    def half_then_fail(path, solids, target):
+        Path(path).write_text("ISO-10303-21;\nHEADER;\n", encoding="ascii")
+        raise RuntimeError("the STEP writer refused the shapes")
+
+    with monkeypatch.context() as m:
+        m.setattr(step, "_write_file", half_then_fail)
+        with pytest.raises(RuntimeError, match="refused"):
+            step.write_solids([_unchecked_solid()], tmp_path / "roller.step")
+    assert list(tmp_path.iterdir()) == []
+
+    def written(path, solids, target):
+        Path(path).write_text("ISO-10303-21;\n", encoding="ascii")
+
+    with monkeypatch.context() as m:
+        m.setattr(step, "_write_file", written)
+        m.setattr(step, "read_step", lambda path: step.StepFileContent(names=(), shapes=(), schema="", description=()))
+        section = step.write_solids([_unchecked_solid()], tmp_path / "roller.step")
+    assert section["file"] is None and section["written"] == []
+    assert section["reread_problems"] == ["the roller is missing by name in the file read back"]
+    assert section["parts"]["roller"]["reread_name"] is False
+    assert list(tmp_path.iterdir()) == []

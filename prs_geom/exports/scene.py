@@ -31,7 +31,6 @@ import hashlib
 import json
 import locale
 import math
-import os
 import struct
 import uuid
 from contextlib import contextmanager
@@ -43,6 +42,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom._version import __version__
+from prs_geom.model.io import atomic_path, write_file_atomic
+
+__all__ = ["ANIMATION_PERIOD_S", "ANIMATION_STEP_DEG", "MATERIALS", "SHARP_EDGE_DEG", "Z_UP_TO_Y_UP", "Material",
+           "Scene", "SceneAnimation", "SceneMesh", "SceneNode", "animation_angles", "assembly_scene", "glb_bytes",
+           "mechanism_animation", "moving_group", "quaternions", "split_normals", "write_3mf", "write_glb"]
 
 #: Corners whose adjacent faces bend by more than this share no normal (deg).
 SHARP_EDGE_DEG = 30.0
@@ -184,6 +188,7 @@ def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _family(name: str) -> str:
+    """The material key of a placed part (its family: screw, roller, gear, ...)."""
     return ("gear" if "gear" in name else "retaining_ring" if name.startswith("retaining_ring")
             else name.split("_")[0])
 
@@ -193,7 +198,7 @@ def _scene_meshes(asm: Any) -> tuple[dict[str, SceneMesh], dict[int, str]]:
     without the roller index; and the name of each mesh by id."""
     meshes: dict[str, SceneMesh] = {}
     by_id: dict[int, str] = {}
-    for name, (mesh, T, kind) in asm.placed.items():
+    for name, (mesh, _, _) in asm.placed.items():
         if id(mesh) not in by_id:
             base = name if not name.startswith("roller_") else "roller" + name[len("roller_") + 1:].lstrip("0123456789")
             key = base if base not in meshes else f"{base}_{len(meshes)}"
@@ -379,41 +384,72 @@ def _decomposed(T: NDArray[np.float64], scale: float) -> dict[str, list[float]]:
     return out
 
 
-def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
-    """The scene as a glTF 2.0 binary (see the module docstring for the conventions)."""
-    scale = 1e-3                                   # mm -> m
-    blob = bytearray()
-    views: list[dict[str, Any]] = []
-    accessors: list[dict[str, Any]] = []
+#: glTF constants: bufferView targets, accessor component types, primitive mode.
+_ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
+_FLOAT, _UNSIGNED_INT = 5126, 5125
+_TRIANGLES = 4
 
-    def add(data: bytes, target: int) -> int:
-        while len(blob) % 4:
-            blob.append(0)
-        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data), "target": target})
-        blob.extend(data)
-        return len(views) - 1
 
-    materials = list(scene.materials)
-    gl_materials = [{"name": m.name, "pbrMetallicRoughness": {
+class _GlbBuffer:
+    """The binary chunk of a .glb being filled: bytes, buffer views and accessors, each
+    view starting on a 4-byte boundary."""
+
+    def __init__(self) -> None:
+        self.blob = bytearray()
+        self.views: list[dict[str, Any]] = []
+        self.accessors: list[dict[str, Any]] = []
+
+    def view(self, data: bytes, target: int | None) -> int:
+        """Append ``data`` as a buffer view (``target`` None for data that are not vertex
+        data, e.g. keyframes); its index."""
+        while len(self.blob) % 4:
+            self.blob.append(0)
+        view: dict[str, Any] = {"buffer": 0, "byteOffset": len(self.blob), "byteLength": len(data)}
+        if target is not None:
+            view["target"] = target
+        self.views.append(view)
+        self.blob.extend(data)
+        return len(self.views) - 1
+
+    def accessor(self, entry: dict[str, Any]) -> int:
+        self.accessors.append(entry)
+        return len(self.accessors) - 1
+
+
+def _gl_materials(scene: Scene) -> list[dict[str, Any]]:
+    return [{"name": m.name, "pbrMetallicRoughness": {
         "baseColorFactor": list(m.colour), "metallicFactor": m.metallic, "roughnessFactor": m.roughness}}
         for m in scene.materials.values()]
+
+
+def _gl_meshes(scene: Scene, buf: _GlbBuffer, sharp_deg: float, scale: float) -> tuple[list[dict[str, Any]],
+                                                                                      dict[str, int]]:
+    """One glTF mesh per scene mesh (positions scaled to metres as float32, split normals,
+    uint32 indices) and the glTF index of each by name."""
+    materials = list(scene.materials)
     gl_meshes, mesh_index = [], {}
     for key, sm in scene.meshes.items():
         V, N, F = split_normals(sm.vertices, sm.faces, sharp_deg)
         pos = (V * scale).astype(np.float32)
         nrm = N.astype(np.float32)
         idx = F.astype(np.uint32)
-        accessors.append({"bufferView": add(pos.tobytes(), 34962), "componentType": 5126, "count": len(pos),
-                          "type": "VEC3", "min": [float(v) for v in pos.min(0)], "max": [float(v) for v in pos.max(0)]})
-        accessors.append({"bufferView": add(nrm.tobytes(), 34962), "componentType": 5126, "count": len(nrm),
-                          "type": "VEC3"})
-        accessors.append({"bufferView": add(idx.tobytes(), 34963), "componentType": 5125, "count": idx.size,
-                          "type": "SCALAR"})
-        a = len(accessors)
-        gl_meshes.append({"name": key, "primitives": [{"attributes": {"POSITION": a - 3, "NORMAL": a - 2},
-                                                        "indices": a - 1, "mode": 4,
+        position = buf.accessor({"bufferView": buf.view(pos.tobytes(), _ARRAY_BUFFER), "componentType": _FLOAT,
+                                 "count": len(pos), "type": "VEC3", "min": [float(v) for v in pos.min(0)],
+                                 "max": [float(v) for v in pos.max(0)]})
+        normal = buf.accessor({"bufferView": buf.view(nrm.tobytes(), _ARRAY_BUFFER), "componentType": _FLOAT,
+                               "count": len(nrm), "type": "VEC3"})
+        indices = buf.accessor({"bufferView": buf.view(idx.tobytes(), _ELEMENT_ARRAY_BUFFER),
+                                "componentType": _UNSIGNED_INT, "count": idx.size, "type": "SCALAR"})
+        gl_meshes.append({"name": key, "primitives": [{"attributes": {"POSITION": position, "NORMAL": normal},
+                                                        "indices": indices, "mode": _TRIANGLES,
                                                         "material": materials.index(sm.material)}]})
         mesh_index[key] = len(gl_meshes) - 1
+    return gl_meshes, mesh_index
+
+
+def _gl_nodes(scene: Scene, mesh_index: dict[str, int], scale: float) -> list[dict[str, Any]]:
+    """The glTF nodes: the root ``prs_geom`` (z up to y up), then the scene's nodes depth
+    first, each before its children."""
     gl_nodes: list[dict[str, Any]] = [{"name": "prs_geom", "rotation": list(Z_UP_TO_Y_UP), "children": []}]
 
     def add_node(node: SceneNode) -> int:
@@ -427,38 +463,34 @@ def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
         return i
 
     gl_nodes[0]["children"] = [add_node(n) for n in scene.nodes]
-    node_index = {n["name"]: i for i, n in enumerate(gl_nodes)}
-    gl_animations = []
-    for anim in scene.animations:
-        # keyframe data are not vertex data: buffer views without a target
-        def add_keys(values: NDArray[np.float64], kind: str, bounds: bool = False) -> int:
-            data = np.ascontiguousarray(values, dtype=np.float32)
-            while len(blob) % 4:
-                blob.append(0)
-            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes})
-            blob.extend(data.tobytes())
-            acc: dict[str, Any] = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data),
-                                   "type": kind}
-            if bounds:
-                acc.update(min=[float(data.min())], max=[float(data.max())])
-            accessors.append(acc)
-            return len(accessors) - 1
+    return gl_nodes
 
-        times = add_keys(anim.times_s, "SCALAR", bounds=True)
-        samplers, channels = [], []
-        for node, paths in anim.channels.items():
-            for path, values in paths.items():
-                out = add_keys(values * scale if path == "translation" else values,
-                               "VEC3" if path == "translation" else "VEC4")
-                samplers.append({"input": times, "output": out, "interpolation": "LINEAR"})
-                channels.append({"sampler": len(samplers) - 1, "target": {"node": node_index[node], "path": path}})
-        gl_animations.append({"name": anim.name, "samplers": samplers, "channels": channels})
-    doc = {"asset": {"version": "2.0", "generator": f"prs_geom {__version__}"},
-           "scene": 0, "scenes": [{"name": scene.title or "prs_geom assembly", "nodes": [0]}],
-           "nodes": gl_nodes, "meshes": gl_meshes, "materials": gl_materials,
-           "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": len(blob)}]}
-    if gl_animations:
-        doc["animations"] = gl_animations
+
+def _gl_animation(anim: SceneAnimation, buf: _GlbBuffer, node_index: dict[str, int], scale: float) -> dict[str, Any]:
+    """One glTF animation: a sampler per animated node and path, linear keys (translations
+    scaled to metres), the key times shared."""
+    def add_keys(values: NDArray[np.float64], kind: str, bounds: bool = False) -> int:
+        data = np.ascontiguousarray(values, dtype=np.float32)
+        entry: dict[str, Any] = {"bufferView": buf.view(data.tobytes(), None), "componentType": _FLOAT,
+                                 "count": len(data), "type": kind}
+        if bounds:
+            entry.update(min=[float(data.min())], max=[float(data.max())])
+        return buf.accessor(entry)
+
+    times = add_keys(anim.times_s, "SCALAR", bounds=True)
+    samplers, channels = [], []
+    for node, paths in anim.channels.items():
+        for path, values in paths.items():
+            out = add_keys(values * scale if path == "translation" else values,
+                           "VEC3" if path == "translation" else "VEC4")
+            samplers.append({"input": times, "output": out, "interpolation": "LINEAR"})
+            channels.append({"sampler": len(samplers) - 1, "target": {"node": node_index[node], "path": path}})
+    return {"name": anim.name, "samplers": samplers, "channels": channels}
+
+
+def _glb_container(doc: dict[str, Any], blob: bytearray) -> bytes:
+    """The .glb file: 12-byte header, the JSON chunk (space-padded) and the BIN chunk
+    (zero-padded), each a multiple of 4 bytes."""
     js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
     js += b" " * (-len(js) % 4)
     blob.extend(b"\0" * (-len(blob) % 4))
@@ -467,17 +499,39 @@ def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
                      struct.pack("<I4s", len(blob), b"BIN\0"), bytes(blob)])
 
 
+def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
+    """The scene as a glTF 2.0 binary (see the module docstring for the conventions)."""
+    scale = 1e-3                                   # mm -> m
+    buf = _GlbBuffer()
+    gl_meshes, mesh_index = _gl_meshes(scene, buf, sharp_deg, scale)
+    gl_nodes = _gl_nodes(scene, mesh_index, scale)
+    node_index = {n["name"]: i for i, n in enumerate(gl_nodes)}
+    gl_animations = [_gl_animation(anim, buf, node_index, scale) for anim in scene.animations]
+    doc = {"asset": {"version": "2.0", "generator": f"prs_geom {__version__}"},
+           "scene": 0, "scenes": [{"name": scene.title or "prs_geom assembly", "nodes": [0]}],
+           "nodes": gl_nodes, "meshes": gl_meshes, "materials": _gl_materials(scene),
+           "accessors": buf.accessors, "bufferViews": buf.views, "buffers": [{"byteLength": len(buf.blob)}]}
+    if gl_animations:
+        doc["animations"] = gl_animations
+    return _glb_container(doc, buf.blob)
+
+
 def write_glb(scene: Scene, path: Path | str) -> None:
-    Path(path).write_bytes(glb_bytes(scene))
+    """Write the scene as ``.glb`` (:func:`glb_bytes`), atomically
+    (:func:`prs_geom.model.io.write_file_atomic`)."""
+    write_file_atomic(path, glb_bytes(scene))
 
 
 # --------------------------------------------------------------------------- 3MF
 def _uuid(*parts: str) -> str:
+    """A UUID derived from ``parts`` (SHA-256), so that the 3MF file is the same bytes from run to run."""
     return str(uuid.UUID(hashlib.sha256("\0".join(parts).encode()).hexdigest()[:32]))
 
 
 def write_3mf(scene: Scene, path: Path | str) -> None:
-    """Write the scene as 3MF with lib3mf (unit millimetre; see the module docstring)."""
+    """Write the scene as 3MF with lib3mf (unit millimetre; see the module docstring),
+    atomically (:func:`prs_geom.model.io.atomic_path`): ``path`` is never half-written and no
+    temporary file is left behind."""
     import lib3mf
 
     wrapper = lib3mf.get_wrapper()
@@ -515,12 +569,16 @@ def write_3mf(scene: Scene, path: Path | str) -> None:
     meta = model.GetMetaDataGroup()
     meta.AddMetaData("", "Title", scene.title or "prs_geom assembly", "string", True)
     meta.AddMetaData("", "Application", f"prs_geom {__version__}", "string", True)
+    with atomic_path(path) as tmp:
+        _write_model(model, tmp)
+
+
+def _write_model(model: Any, path: Path) -> None:
+    """lib3mf's 3MF writer on ``model``, to ``path``, coordinates to 9 decimals."""
     writer = model.QueryWriter("3mf")
     writer.SetDecimalPrecision(9)
-    tmp = Path(path).with_name(Path(path).name + ".part")
     with _locale_kept():
-        writer.WriteToFile(str(tmp))
-    os.replace(tmp, path)
+        writer.WriteToFile(str(path))
 
 
 @contextmanager

@@ -18,6 +18,7 @@ can cost much memory or time.
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import errno
 import json
@@ -29,7 +30,7 @@ import stat
 import sys
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, EnvironmentFailure, OutputRefused, key_name, quote
@@ -566,18 +567,34 @@ def check_output_file(target: str | os.PathLike[str], force: bool = False) -> Pa
     return path
 
 
-def write_file_atomic(path: Path, text: str | bytes) -> None:
-    """Write ``text`` (UTF-8) or bytes to ``path`` through a temporary sibling and a rename."""
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """A temporary path to write ``path`` through: yields the hidden sibling
+    ``.<name>.tmp-<pid>-<random>`` (same folder, so the rename is atomic), which the block
+    creates; when the block ends normally the file replaces ``path`` (``os.replace``).
+
+    When the block raises (or the rename fails) the temporary file is removed and ``path``
+    is left as it was: never half-written. For writers that take a file name (OpenCascade,
+    lib3mf); :func:`write_file_atomic` writes text or bytes through it.
+    """
+    path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}-{secrets.token_hex(4)}")
     try:
-        if isinstance(text, bytes):
-            tmp.write_bytes(text)
-        else:
-            tmp.write_text(text, encoding="utf-8")
+        yield tmp
         os.replace(tmp, path)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def write_file_atomic(path: str | os.PathLike, text: str | bytes) -> None:
+    """Write ``text`` (UTF-8) or bytes to ``path`` through a temporary sibling and a rename
+    (:func:`atomic_path`): ``path`` holds either its old content or all of the new."""
+    with atomic_path(path) as tmp:
+        if isinstance(text, bytes):
+            tmp.write_bytes(text)
+        else:
+            tmp.write_text(text, encoding="utf-8")
 
 
 def load_spectrum(path: str | Path):
