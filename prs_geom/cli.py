@@ -32,7 +32,7 @@ from prs_geom.exports.output import check_output_dir
 from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, ResourceLimitError, parse_size
 from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
-from prs_geom.progress import ConsoleProgress, silent
+from prs_geom.runtime.progress import ConsoleProgress, silent
 
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
@@ -289,7 +289,7 @@ def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
 
         design = design.with_changes(loads=replace(design.loads, compliance=args.compliance))
     if design.loads.compliance == "fe":
-        from prs_geom.fe_cache import require_fe
+        from prs_geom.analysis.fe.cache import require_fe
 
         require_fe()
     return design
@@ -485,7 +485,7 @@ def _execution(args: argparse.Namespace, quiet: bool):
     """Where the chunks of a study run (--workers, --scheduler, --dask-workers)."""
     from prs_geom.studies import Execution
 
-    from prs_geom.scaleout import resolve_backend
+    from prs_geom.runtime.scaleout import resolve_backend
 
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers", args.workers, "must be >= 1")
@@ -496,7 +496,7 @@ def _execution(args: argparse.Namespace, quiet: bool):
     except DesignError as exc:
         raise exc.renamed("--" + exc.field.replace("_", "-")) from None
     if backend.kind == "dask":
-        from prs_geom.scaleout import require_dask
+        from prs_geom.runtime.scaleout import require_dask
 
         require_dask()   # a missing extra is known before any work (exit 3)
     return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
@@ -964,7 +964,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 0 for --help/--version, 2 for usage errors
         return int(exc.code or 0)
     args.debug = debug
-    # one progress display per command, on stderr (prs_geom.progress); none with --quiet or
+    # one progress display per command, on stderr (prs_geom.runtime.progress); none with --quiet or
     # --json. It starts with the first stage a command reports, so quick commands show nothing.
     display = None
     if not (getattr(args, "quiet", False) or getattr(args, "json", False)):

@@ -4,7 +4,7 @@
 Sits at the pipeline layer: it builds the problems from the design (:mod:`prs_geom.analysis`),
 cuts the samples into chunks of :data:`CHUNK_SAMPLES` whatever the number of workers, gives
 every chunk its own :class:`numpy.random.SeedSequence` stream (``spawn_seeds(seed, k)``)
-and runs them through :func:`prs_geom.scaleout.run_chunks` (serial, joblib or Dask). The
+and runs them through :func:`prs_geom.runtime.scaleout.run_chunks` (serial, joblib or Dask). The
 results are gathered in chunk order, so the same seed gives the same numbers, bit for bit,
 on any backend and any number of workers.
 
@@ -33,8 +33,8 @@ from prs_geom.analysis.robust import PitchFamily, weighted_quantile
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
 from prs_geom.model.spectrum import Spectrum
-from prs_geom.progress import ProgressFn
-from prs_geom.scaleout import run_chunks, spawn_seeds
+from prs_geom.runtime.progress import ProgressFn
+from prs_geom.runtime.scaleout import run_chunks, spawn_seeds
 
 #: Samples per chunk: fixed, so that the draws do not depend on the worker count.
 CHUNK_SAMPLES = 250

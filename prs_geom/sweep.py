@@ -23,7 +23,7 @@ error model), and every dimension the base design took by default
 (truncation diameters, roller arc radius, screw length) is derived again for the point's
 pitch and teeth; dimensions the base design states are kept, and may then break a rule.
 
-The points run through :func:`prs_geom.scaleout.run_chunks` in chunks of a fixed size, so the
+The points run through :func:`prs_geom.runtime.scaleout.run_chunks` in chunks of a fixed size, so the
 table is the same, bit for bit, serially, with joblib or on Dask. Sweep order: the product
 in the order starts, rollers, pitch, teeth, loads, each axis in the order given (the last
 axis varies fastest).
@@ -48,7 +48,7 @@ from typing import Any, Callable, Sequence
 
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, DesignWarning, PRSGeomError
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 __all__ = ["Column", "SweepPoint", "SweepResult", "sweep", "point_design", "evaluate_point",
            "DEFAULT_FRACTIONS", "CHUNK_POINTS", "SERIAL_BELOW", "add_arguments", "print_table", "run"]
@@ -336,7 +336,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
         Fractions of each point's design load at which the graded design is evaluated
         (default 25, 50, 100, 150 %).
     workers : int, optional
-        joblib worker processes (:func:`prs_geom.scaleout.run_chunks`); default one per CPU,
+        joblib worker processes (:func:`prs_geom.runtime.scaleout.run_chunks`); default one per CPU,
         but serial for fewer than :data:`SERIAL_BELOW` points. The table does not depend on
         where the points run.
     scheduler : str or distributed.Client, optional
@@ -358,7 +358,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
     EnvironmentFailure
         Dask asked for but not installed, or its scheduler cannot be reached.
     """
-    from prs_geom.scaleout import plan_chunks, run_chunks
+    from prs_geom.runtime.scaleout import plan_chunks, run_chunks
 
     s_axis = _axis("starts", starts, None)
     z_axis = _axis("rollers", rollers, design.roller.count)

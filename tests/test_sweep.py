@@ -16,7 +16,7 @@ from prs_geom.analysis.loads import (axial_stiffness, build_model, design_pitch,
 from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread, default_design
 from prs_geom.model.errors import DesignError, EnvironmentFailure
 from prs_geom.model.plausibility import design_warnings
-from prs_geom.scaleout import DASK_INSTALL
+from prs_geom.runtime.scaleout import DASK_INSTALL
 from prs_geom.sweep import CHUNK_POINTS, SweepPoint, add_arguments, point_design, run, sweep
 
 AXES = {"starts": [4, 5], "rollers": [8, 10], "pitch_mm": [1.5], "teeth": [6, 10], "loads": [0.5, 1.0]}
@@ -149,7 +149,7 @@ def test_tolerances_are_dropped_so_that_other_tooth_counts_stay_valid():
 
 
 def test_small_sweeps_run_in_this_process_unless_workers_are_asked_for(monkeypatch):
-    import prs_geom.scaleout as scaleout
+    import prs_geom.runtime.scaleout as scaleout
 
     seen = []
     real = scaleout.run_chunks

@@ -104,7 +104,7 @@ from numpy.typing import NDArray
 from scipy import linalg
 
 from prs_geom.model.errors import ConvergenceError, DesignError
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 
 # --------------------------------------------------------------------------- model

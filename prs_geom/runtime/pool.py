@@ -7,7 +7,7 @@ worker processes while the main process meshes and writes the rest; the main pro
 each result at the point of the run where the stage used to be, so the report and every
 file are the same as in a serial run (the golden test checks both ways). The tolerance
 study and the design sweep run their chunks in the same kind of pool
-(:func:`prs_geom.scaleout.run_chunks`).
+(:func:`prs_geom.runtime.scaleout.run_chunks`).
 
 Processes, not threads: FCL, manifold3d and matplotlib hold the GIL. The pool is joblib's
 *loky* executor: its workers are fresh interpreters (never forked: manifold3d and BLAS start
