@@ -481,30 +481,37 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _add_execution_args(parser: argparse.ArgumentParser, workers_default: str = "one per CPU") -> None:
+    """The execution flags of every command that runs chunked work (validated by
+    :func:`_execution`); ``workers_default`` says what no ``--workers`` means."""
+    group = parser.add_argument_group("where the work runs (same seed, same numbers on any of them)")
+    group.add_argument("--workers", type=int, metavar="N",
+                       help=f"local worker processes (joblib; default {workers_default}, 1 = no extra process)")
+    group.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
+                       "or 'local' (needs pip install \"prs-geom[dask]\")")
+    group.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
+
+
 def _execution(args: argparse.Namespace, quiet: bool):
-    """Where the chunks of a study run (--workers, --scheduler, --dask-workers)."""
+    """Where the chunks of a command's work run (the flags of :func:`_add_execution_args`),
+    checked before any work: counts >= 1, joblib and Dask not both (the scale-out's own rule,
+    named by its parameters, which :func:`main` prints as the flags), the Dask extra present."""
+    from prs_geom.runtime.scaleout import require_dask, resolve_backend
     from prs_geom.studies import Execution
 
-    from prs_geom.runtime.scaleout import resolve_backend
-
-    if args.workers is not None and args.workers < 1:
-        raise DesignError("--workers", args.workers, "must be >= 1")
-    if args.dask_workers is not None and args.dask_workers < 1:
-        raise DesignError("--dask-workers", args.dask_workers, "must be >= 1")
-    try:   # validate the combination up front, under the flags' own names
-        backend = resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
-    except DesignError as exc:
-        raise exc.renamed("--" + exc.field.replace("_", "-")) from None
+    for parameter in ("workers", "dask_workers"):
+        count = getattr(args, parameter)
+        if count is not None and count < 1:
+            raise DesignError(parameter, count, "must be >= 1")
+    backend = resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
     if backend.kind == "dask":
-        from prs_geom.runtime.scaleout import require_dask
-
         require_dask()   # a missing extra is known before any work (exit 3)
     return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
                      progress=silent if quiet else args.progress)
 
 
 def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
-    """The design's [tolerances] (or none) with the flags on top; flags name themselves in errors."""
+    """The design's [tolerances] (or none) with the flags on top."""
     from dataclasses import replace
 
     from prs_geom.model.design import Tolerances
@@ -528,12 +535,7 @@ def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
         changes["source"] = design.tolerances.source + " (changed on the command line)"
     elif changes:
         changes["source"] = "given on the command line"
-    try:
-        return replace(base, **changes)
-    except DesignError as exc:
-        flag = {"screw_eccentricity_um": "eccentricity_um", "nut_eccentricity_um": "eccentricity_um",
-                "load_fractions": "load_fraction"}.get(exc.field.split("[")[0], exc.field.split("[")[0])
-        raise exc.renamed("--" + flag.replace("_", "-")) from None
+    return replace(base, **changes)   # a bad value names its field, main() prints the flag
 
 
 def cmd_tolerance(args: argparse.Namespace) -> int:
@@ -549,8 +551,8 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
         if args.load_fraction:
             raise UsageError("give --spectrum or --load-fraction, not both")
         loads = load_spectrum(args.spectrum).loads_n
-    if args.confidence is not None and not 0.0 < args.confidence < 1.0:
-        raise DesignError("--confidence", args.confidence, "must be in (0, 1)")
+    if args.confidence is not None:
+        studies.check_probability("confidence", args.confidence)
     if args.target_ldc is not None:
         if args.flank_um is not None:
             raise UsageError("--flank-um and --target-ldc: the synthesis chooses the flank tolerance; "
@@ -682,14 +684,28 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from prs_geom import sweep
+    """Run the sweep, print the table (or JSON) and write the CSV of ``--out``; exit 0 however
+    many points are invalid (they are rows of the table)."""
+    import json
+
+    from prs_geom.sweep import print_table, sweep
 
     design = _load(args.design)
     _warn(design)
+    execution = _execution(args, quiet=args.json or args.quiet)
     if args.out:
         check_output_file(args.out, args.force)        # refuse before the work
-    return sweep.run(args, design, progress=args.progress,
-                     write_out=lambda text: _write_out_file(args.out, text, args.force))
+    result = sweep(design, starts=args.starts, rollers=args.rollers, pitch_mm=args.pitch, teeth=args.teeth,
+                   loads=args.loads, workers=execution.workers, scheduler=execution.scheduler,
+                   dask_workers=execution.dask_workers, progress=args.progress)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2))
+    else:
+        print_table(result)
+    if args.out:
+        _write_out_file(args.out, result.csv_text(), args.force)
+        print(f"wrote {args.out}: {result.summary()}", file=sys.stderr)
+    return EXIT_OK
 
 
 def cmd_harmonic(args: argparse.Namespace) -> int:
@@ -767,14 +783,6 @@ def make_parser() -> argparse.ArgumentParser:
     def design_arg(q: argparse.ArgumentParser) -> None:
         q.add_argument("design", nargs="?", metavar="DESIGN",
                        help="design file (.toml or .json); the built-in default design if omitted")
-
-    def scale_args(q: argparse.ArgumentParser) -> None:
-        g = q.add_argument_group("where the work runs (same seed, same numbers on any of them)")
-        g.add_argument("--workers", type=int, metavar="N",
-                       help="local worker processes (joblib; default one per CPU, 1 = no extra process)")
-        g.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
-                       "or 'local' (needs pip install \"prs-geom[dask]\")")
-        g.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
 
     def compliance_arg(q: argparse.ArgumentParser) -> None:
         q.add_argument("--compliance", choices=("analytic", "fe"),
@@ -892,7 +900,7 @@ def make_parser() -> argparse.ArgumentParser:
                                                        "(the design goes to --out)")
     compliance_arg(p)
     error_args(p)
-    scale_args(p)
+    _add_execution_args(p)
     p.set_defaults(func=cmd_design_pitch)
 
     p = sub.add_parser("tolerance", help="load sharing under manufacturing errors; tolerance synthesis",
@@ -914,10 +922,10 @@ def make_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace an existing --out file")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--quiet", action="store_true", help="no progress output")
-    scale_args(p)
+    _add_execution_args(p)
     p.set_defaults(func=cmd_tolerance)
 
-    from prs_geom import sweep as sweep_cli
+    from prs_geom.sweep import SERIAL_BELOW
 
     p = sub.add_parser("sweep", help="design-space sweep: every combination of starts, rollers, pitch, teeth",
                        description="Evaluate every combination of the given screw/nut starts, roller counts, "
@@ -926,7 +934,22 @@ def make_parser() -> argparse.ArgumentParser:
                                    "graded design at 25/50/100/150 % load, axial stiffness and the largest "
                                    "pitch correction (docs/scaleout.md).")
     design_arg(p)
-    sweep_cli.add_arguments(p)
+    p.add_argument("--starts", type=int, nargs="+", action="extend", metavar="N",
+                   help="screw and nut starts to sweep (default: the design's)")
+    p.add_argument("--rollers", type=int, nargs="+", action="extend", metavar="Z",
+                   help="roller counts to sweep (default: the design's)")
+    p.add_argument("--pitch", type=float, nargs="+", action="extend", metavar="MM",
+                   help="axial pitches in mm to sweep (default: the design's)")
+    p.add_argument("--teeth", type=int, nargs="+", action="extend", metavar="N",
+                   help="engaged teeth to sweep (default: the design's)")
+    p.add_argument("--loads", type=float, nargs="+", action="extend", metavar="FRACTION",
+                   help="design loads to sweep as fractions of the design's (default 1)")
+    _add_execution_args(p, workers_default=f"one per CPU, none for fewer than {SERIAL_BELOW} points")
+    p.add_argument("--json", action="store_true", help="print the table as JSON (columns with units, rows)")
+    p.add_argument("--out", metavar="FILE.csv", help="also write the table as CSV (an existing file is "
+                                                     "refused unless --force)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
@@ -944,6 +967,26 @@ def make_parser() -> argparse.ArgumentParser:
             q.add_argument("--quiet", action="store_true", help="no progress display (warnings and errors "
                                                                 "still print)")
     return parser
+
+
+#: Parameters of the library that a command-line flag sets, with that flag: a library error
+#: names the parameter (or design field); :func:`main` prints the flag the user typed.
+FLAG_OF_PARAMETER = {
+    "workers": "--workers", "scheduler": "--scheduler", "dask_workers": "--dask-workers",
+    "confidence": "--confidence", "target_ldc": "--target-ldc", "quantile": "--quantile",
+    "samples": "--samples", "seed": "--seed", "distribution": "--distribution",
+    "flank_um": "--flank-um", "roller_diameter_um": "--roller-diameter-um",
+    "screw_eccentricity_um": "--eccentricity-um", "nut_eccentricity_um": "--eccentricity-um",
+    "lead_um": "--lead-um", "temperature_k": "--temperature-k", "load_fractions": "--load-fraction",
+}
+
+
+def flag_named(exc: DesignError) -> DesignError:
+    """``exc`` under the command-line flag of its field (:data:`FLAG_OF_PARAMETER`; an index
+    such as ``[2]`` is kept), or ``exc`` itself when no flag sets that field."""
+    parameter, bracket, index = exc.field.partition("[")
+    flag = FLAG_OF_PARAMETER.get(parameter)
+    return exc if flag is None else exc.renamed(flag + bracket + index)
 
 
 def _one_line(exc: OSError) -> str:
@@ -1014,7 +1057,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         print("interrupted", file=sys.stderr)
         return EXIT_SIGTERM
-    except (DesignError, UsageError, OutputRefused) as exc:
+    except DesignError as exc:
+        return fail(EXIT_INPUT, str(flag_named(exc)))
+    except (UsageError, OutputRefused) as exc:
         return fail(EXIT_INPUT, str(exc))
     except (EnvironmentFailure, ResourceLimitError) as exc:
         return fail(EXIT_ENVIRONMENT, str(exc))

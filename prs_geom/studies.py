@@ -111,6 +111,19 @@ NO_ERROR_MODEL = ("the design has no error model: add a [tolerances] section wit
                   "errors would only repeat the loads")
 
 
+def check_probability(parameter: str, value: float) -> float:
+    """``value`` when it is a probability strictly inside (0, 1).
+
+    Raises
+    ------
+    DesignError
+        On field ``parameter`` (the name of the argument that carried it) otherwise.
+    """
+    if not 0.0 < value < 1.0:
+        raise DesignError(parameter, value, "must be in (0, 1)")
+    return value
+
+
 def require_error_model(design: PRSDesign, tolerances: Tolerances | None = None) -> Tolerances:
     """The error model of a study: ``tolerances``, else the design's ``[tolerances]``.
 
@@ -134,8 +147,8 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
     ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
     fractions (or at ``loads_n``, N), all z rollers side by side."""
     tolerances = require_error_model(design, tolerances)
-    if confidence is not None and not 0.0 < confidence < 1.0:
-        raise DesignError("--confidence", confidence, "must be in (0, 1)")
+    if confidence is not None:
+        check_probability("confidence", confidence)
     contact, model = _context(design, contact, model)
     errors = tol.error_model(design, contact, tolerances)
     F0 = design.loading.axial_load_n
@@ -151,8 +164,6 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                                   {g: r.worst.max(axis=0) for g, r in zip(groups, results[1:])}) if variants else []
     section = _study_section(design, tolerances, problem, stats, det, ranking)
     if confidence is not None:
-        if not 0.0 < confidence < 1.0:
-            raise DesignError("--confidence", confidence, "must be in (0, 1)")
         worst = stats.worst.max(axis=0)
         section["at_confidence"] = {
             "confidence": confidence,
@@ -259,15 +270,14 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
     inverse to each flank's linearised influence). Each is re-checked by an independent run
     from ``verify_seed`` (default seed + 1)."""
     if not (math.isfinite(target_ldc) and target_ldc >= 1.0):
-        raise DesignError("--target-ldc", target_ldc, "must be a number >= 1 (the mean tooth carries 1)")
-    if not 0.0 < confidence < 1.0:
-        raise DesignError("--confidence", confidence, "must be in (0, 1)")
+        raise DesignError("target_ldc", target_ldc, "must be a number >= 1 (the mean tooth carries 1)")
+    check_probability("confidence", confidence)
     if tol.clopper_pearson_lower(samples, samples, CP_LEVEL) < confidence:
         # even every sample meeting the target would not prove the confidence
         need = math.ceil(math.log(1.0 - CP_LEVEL) / math.log(confidence))
-        raise DesignError("--samples", samples, f"too few to show probability {confidence:g} at "
-                                                f"{CP_LEVEL:.0%} confidence even if every sample met the "
-                                                f"target: use at least {need}")
+        raise DesignError("samples", samples, f"too few to show probability {confidence:g} at "
+                                              f"{CP_LEVEL:.0%} confidence even if every sample met the "
+                                              f"target: use at least {need}")
     contact, model = _context(design, contact, model)
     n = design.thread.engaged_teeth
     base = replace(base or Tolerances(), flank_um=0.0, screw_flank_um=None, roller_screw_flank_um=None,
@@ -410,8 +420,7 @@ def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances |
     (1, 1) are members of the grid, so the result is never worse than either on the
     objective."""
     from scipy import optimize
-    if not 0.0 < quantile < 1.0:
-        raise DesignError("--quantile", quantile, "must be in (0, 1)")
+    check_probability("quantile", quantile)
     tolerances = tolerances or design.tolerances or Tolerances()
     contact, model = _context(design, contact, model)
     errors = tol.error_model(design, contact, tolerances)
