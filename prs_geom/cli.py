@@ -34,9 +34,13 @@ from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
 from prs_geom.runtime.progress import ConsoleProgress, silent
 
+__all__ = ["EXIT_OK", "EXIT_FOUND", "EXIT_INPUT", "EXIT_ENVIRONMENT", "EXIT_INTERNAL", "EXIT_SIGINT",
+           "EXIT_SIGTERM", "FLAG_OF_PARAMETER", "UsageError", "Terminated", "make_parser", "flag_named", "main",
+           "entry_point", "cmd_init", "cmd_validate", "cmd_build", "cmd_contact", "cmd_check", "cmd_loads",
+           "cmd_rating", "cmd_design_pitch", "cmd_tolerance", "cmd_sweep", "cmd_harmonic"]
+
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
-#: Environment variable read as the default of ``--memory-budget``.
 
 
 class UsageError(PRSGeomError):
@@ -147,6 +151,7 @@ def _add_init_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]")
 
 
 def cmd_init(args: argparse.Namespace) -> int:
+    """Write the default design as commented TOML to stdout or ``--out``; exit 0."""
     text = dumps_toml(default_design(), header=(
         "prs_geom design file (TOML). Units: mm, N, MPa; angles in degrees.\n"
         "Every key is optional; omitted keys take the built-in default.\n"
@@ -173,6 +178,7 @@ def _add_validate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParse
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
+    """Validate a design (exit 2 naming the field), print its warnings and the build estimate; exit 0."""
     design = _load_any(args.design)
     _warn(design)
     if isinstance(design, PRSDesign):
@@ -234,6 +240,7 @@ def _add_build_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 
 def cmd_build(args: argparse.Namespace) -> int:
+    """Run every stage and write all exports and report.json into the output folder (its path on stdout)."""
     from prs_geom.pipeline import build
 
     design = _load_any(args.design)
@@ -285,6 +292,7 @@ def _add_contact_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser
 
 
 def cmd_contact(args: argparse.Namespace) -> int:
+    """Print the contact points and the theoretical screw pitch diameter (or the JSON section); exit 0."""
     from prs_geom.analysis.contact import contact_report
 
     design = _load(args.design)
@@ -329,6 +337,7 @@ def _add_check_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 
 def cmd_check(args: argparse.Namespace) -> int:
+    """Interference check of the assembly; exit 1 when parts interfere."""
     from prs_geom.checks.interference import interference
 
     from prs_geom.mesh.budget import guard
@@ -368,6 +377,7 @@ def _add_loads_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 
 def cmd_loads(args: argparse.Namespace) -> int:
+    """Print the tooth-load distribution (or the JSON section), with ``--compliance fe`` the model risk; exit 0."""
     from prs_geom.analysis.loads import loads_report
 
     design = _load(args.design)
@@ -482,6 +492,7 @@ def _add_rating_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]
 
 
 def cmd_rating(args: argparse.Namespace) -> int:
+    """Print the ratings, lives, limit checks, efficiency and stiffness; exit 1 on a failed limit with ``--strict``."""
     from prs_geom.analysis.contact import analyse_contact
     from prs_geom.analysis.rating import analyse_rating, rating_case
 
@@ -527,7 +538,7 @@ def cmd_rating(args: argparse.Namespace) -> int:
 def _table(rows: list[list[str]], min_widths: Sequence[int]) -> list[str]:
     """Lines of a text table: the first column left-aligned, the others right-aligned; each
     column is its minimum width, widened so that at least two spaces always separate it from
-    the next (no two columns ever touch, whatever the numbers: issue 28)."""
+    the next (no two columns ever touch, whatever the numbers)."""
     widths = [max(w, max(len(r[i]) for r in rows) + 2) for i, w in enumerate(min_widths)]
     return ["".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
             for r in rows]
@@ -634,6 +645,7 @@ def _add_design_pitch_parser(sub: "argparse._SubParsersAction[argparse.ArgumentP
 
 
 def cmd_design_pitch(args: argparse.Namespace) -> int:
+    """Write a design with equal-load (or target, or ``--robust``) pitch lists to stdout or ``--out``; exit 0."""
     from prs_geom.analysis.loads import design_pitches, forward, with_pitch_lists
 
     design = _load(args.design)
@@ -986,6 +998,7 @@ def _add_harmonic_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParse
 
 
 def cmd_harmonic(args: argparse.Namespace) -> int:
+    """Tabulate the harmonic drive's ratio over the axial position (or JSON); exit 0."""
     import numpy as np
 
     from prs_geom.harmonic.model import HarmonicDesign, harmonic_report
@@ -1104,6 +1117,7 @@ def _stop_on_signals() -> dict:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``prs-geom argv`` (default ``sys.argv[1:]``) and return its exit code (module docstring)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     # --debug is accepted anywhere, before or after the sub-command
     debug = "--debug" in argv
@@ -1169,6 +1183,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry_point() -> None:
+    """The console script: :func:`main` as the process exit code."""
     sys.exit(main())
 
 

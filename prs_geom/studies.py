@@ -36,6 +36,10 @@ from prs_geom.model.spectrum import Spectrum
 from prs_geom.runtime.progress import ProgressFn
 from prs_geom.runtime.scaleout import run_chunks, spawn_seeds
 
+__all__ = ["CHUNK_SAMPLES", "CP_LEVEL", "TOLERANCE_STEP_UM", "SYNTHESIS_MAX_UM", "NO_ERROR_MODEL", "Execution",
+           "ToleranceStudy", "SynthesisResult", "RobustResult", "check_probability", "require_error_model",
+           "tolerance_study", "synthesise", "robust_pitch"]
+
 #: Samples per chunk: fixed, so that the draws do not depend on the worker count.
 CHUNK_SAMPLES = 250
 #: Confidence level of the Clopper-Pearson bound of a synthesis.
@@ -58,6 +62,8 @@ class Execution:
     progress: ProgressFn | None = field(default=None, compare=False)
 
     def map(self, task, payloads, stage: str, sizes=None) -> list:
+        """``[task(p) for p in payloads]`` through :func:`~prs_geom.runtime.scaleout.run_chunks`
+        on this execution's backend, in payload order; progress under ``stage``."""
         return run_chunks(task, payloads, workers=self.workers, scheduler=self.scheduler,
                           dask_workers=self.dask_workers, progress=self.progress, stage=stage, sizes=sizes)
 
@@ -241,6 +247,7 @@ class SynthesisResult:
     tolerances: Tolerances | None
 
     def report(self) -> dict[str, Any]:
+        """The synthesis as a JSON-ready dict (report.json's ``tolerance.synthesis``, tolerances in um)."""
         return {"target_ldc": self.target_ldc, "confidence": self.confidence,
                 "confidence_bound": f"one-sided Clopper-Pearson lower bound at {CP_LEVEL:.0%}",
                 "feasible": self.feasible, "uniform_flank_um": self.uniform_um,
@@ -450,6 +457,7 @@ class RobustResult:
     evaluations: int
 
     def report(self) -> dict[str, Any]:
+        """The chosen family member and the comparison as a JSON-ready dict."""
         return {"a_nut_roller": self.a_nr, "a_roller_screw": self.a_rs, "evaluations": self.evaluations,
                 **self.comparison}
 

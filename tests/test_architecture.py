@@ -1,4 +1,4 @@
-"""Issue 12: the package has the shape of its data flow, and it stays that way.
+"""The package has the shape of its data flow, and it stays that way.
 
 Layers are enforced by import-linter (contracts in pyproject.toml); these tests run it,
 check what importing the light layers drags in (in a fresh interpreter), walk the import
@@ -218,7 +218,7 @@ def test_readme_and_docs_stand_alone():
 
 @pytest.mark.parametrize("argv", [["--help"], ["init"], ["build", "--help"], ["rating", "--help"]])
 def test_help_and_init_import_no_heavy_library(argv):
-    """Issue 17: ``prs-geom --help`` and ``prs-geom init`` answer without loading trimesh,
+    """``prs-geom --help`` and ``prs-geom init`` answer without loading trimesh,
     fcl, manifold3d, ezdxf, matplotlib or openpyxl (their import alone costs seconds)."""
     stmt = ("import contextlib, io; from prs_geom import cli\n"
             f"with contextlib.redirect_stdout(io.StringIO()):\n"

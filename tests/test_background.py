@@ -1,4 +1,4 @@
-"""Issue 17: background jobs of a build (prs_geom.runtime.pool)."""
+"""Background jobs of a build (prs_geom.runtime.pool)."""
 from __future__ import annotations
 
 import pickle

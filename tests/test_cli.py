@@ -1,4 +1,4 @@
-"""CLI behaviour: exit codes, error messages, atomic output (issue 2)."""
+"""CLI behaviour: exit codes, error messages, atomic output."""
 import dataclasses
 import math
 import subprocess
@@ -23,7 +23,7 @@ def _write(data, path):
 not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), st.just(math.inf),
                          st.just(-math.inf))
 non_positive = st.one_of(st.floats(max_value=0.0, allow_nan=False), not_a_number)
-#: sizes (mm) outside 0.01 to 1e4 (issue 29: a size below 10 um vanished in the rounding)
+#: sizes (mm) outside 0.01 to 1e4 (a size below 10 um vanished in the rounding)
 bad_size = st.one_of(non_positive, st.floats(1e-300, 0.0099), st.floats(1e4, 1e300, exclude_min=True))
 
 
@@ -98,7 +98,7 @@ INVALID = {
     "gears.face_width_mm": bad_size,
     # the [mechanism] section (layout rules that need the whole design are checked at build)
     "mechanism.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
-    # beyond the ISO 286 tables (500 mm) and not a DIN 472 bore (issue 29: looked up at construction)
+    # beyond the ISO 286 tables (500 mm) and not a DIN 472 bore (looked up at construction)
     "mechanism.journal_diameter_mm": st.one_of(bad_size, st.floats(500.01, 1e4)),
     "mechanism.carrier_thickness_mm": st.one_of(bad_size, st.floats(500.01, 1e4)),
     "mechanism.ring_bore_mm": st.one_of(bad_size, st.sampled_from([7.0, 59.0, 201.0, 250.0])),

@@ -105,7 +105,7 @@ def test_damaged_or_foreign_entries_are_recomputed(design, tmp_path):
 
 
 def test_a_tampered_matrix_is_detected_and_recomputed(design, tmp_path):
-    """Issue 29: an influence matrix multiplied by 1000 in the cache file (its key and
+    """An influence matrix multiplied by 1000 in the cache file (its key and
     description left as they were) fails the checksum: recomputed, replaced, warned."""
     folder = tmp_path / "cache"
     base = _get(design, folder)

@@ -1,4 +1,4 @@
-"""Issue 28: the console progress display (prs_geom.runtime.progress), driven by a fake clock.
+"""The console progress display (prs_geom.runtime.progress), driven by a fake clock.
 
 The real gaps and the interrupt delay of a real build are measured by
 ``benchmarks/bench_build.py``; here the display's rules are checked in fake time.

@@ -49,7 +49,7 @@ def test_sweep_order_columns_and_progress(serial):
                                                     "graded_max_ldc_100pct", "graded_max_ldc_150pct"]
     assert calls == [("sweep", k, N_POINTS) for k in (4, 8, 12, 16)]
     # the 4-start points break the standard sizing of 24/8/40 mm and their rollers drift:
-    # valid with warnings, not valid (issue 28)
+    # valid with warnings, not valid
     assert res.count("ok") == res.count("warnings") == N_POINTS // 2
     assert res.counts() == {"ok": 8, "warnings": 8, "invalid": 0, "failed": 0}
     assert res.summary() == "16 points, 8 valid, 8 valid with warnings, 0 invalid, 0 failed"
@@ -243,7 +243,7 @@ def test_cli_sweep_exit_codes(tmp_path, monkeypatch):
 def test_valid_with_warnings_is_counted_apart_in_table_csv_and_json(tmp_path):
     """A drifting point (4 starts on the 24/8/40 mm default: r_n = 20 != n_n r_r = 16) and an
     implausible one (a 0.05 mm pitch, probably metres) are valid with warnings; a point that
-    breaks a rule is invalid; the counts, the status column and the JSON say so (issue 28)."""
+    breaks a rule is invalid; the counts, the status column and the JSON say so."""
     out_csv = tmp_path / "s.csv"
     code, out, err = _run(["--starts", "4", "5", "--rollers", "10", "12", "--teeth", "6", "--workers", "1",
                            "--out", str(out_csv)])

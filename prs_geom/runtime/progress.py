@@ -90,6 +90,7 @@ class _Row:
     task: Any = None   # the rich task id in a live display
 
     def status(self) -> str:
+        """``name[ (worker)][: label done/total]``."""
         text = f"{self.name} (worker)" if self.in_worker else self.name
         if self.total:
             sub = f"{self.label} " if self.label and self.label != self.name else ""
