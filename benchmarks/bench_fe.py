@@ -1,4 +1,4 @@
-"""Finite-element tooth model timings (prs_geom.analysis.fe, prs_geom.fe_cache).
+"""Finite-element tooth model timings (prs_geom.analysis.fe, prs_geom.analysis.fe.cache).
 
 Run:  python benchmarks/bench_fe.py [--quick]
 
@@ -32,7 +32,7 @@ import numpy as np
 
 from prs_geom.analysis.fe import CONVERGED_LEVEL, DEFAULT_TEETH, convergence_study, influence_matrices
 from prs_geom.analysis.loads import analyse_loads
-from prs_geom.fe_cache import cached_influence
+from prs_geom.analysis.fe.cache import cached_influence
 from prs_geom.model.design import default_design
 
 FRESH = """
@@ -40,7 +40,7 @@ import time, sys
 t0 = time.perf_counter()
 from prs_geom.model.design import default_design
 from prs_geom.analysis.contact import analyse_contact
-from prs_geom.fe_cache import cached_influence
+from prs_geom.analysis.fe.cache import cached_influence
 d = default_design(); c = analyse_contact(d)
 t1 = time.perf_counter()
 r = cached_influence(d, c, folder=sys.argv[1])

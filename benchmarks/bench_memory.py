@@ -24,7 +24,7 @@ from pathlib import Path
 
 def measure(design_file: Path, out: Path, budget: int, workers: int) -> tuple[int, int, float]:
     """(exit code, peak bytes of the process tree, seconds) of one build."""
-    from prs_geom.memwatch import process_tree_rss
+    from prs_geom.runtime.memwatch import process_tree_rss
 
     exe = str(Path(sys.executable).parent / "prs-geom")
     env = {**os.environ, "PRS_GEOM_WORKERS": str(workers)}

@@ -1,4 +1,4 @@
-"""Scale-out timings (prs_geom.scaleout, prs_geom.sweep).
+"""Scale-out timings (prs_geom.runtime.scaleout, prs_geom.sweep).
 
 Run:  python benchmarks/bench_scaleout.py [--dask]
 
@@ -24,7 +24,7 @@ import numpy as np
 from timing import run_timed
 
 from prs_geom.model.design import default_design
-from prs_geom.scaleout import available_cpus, plan_chunks, run_chunks, spawn_seeds
+from prs_geom.runtime.scaleout import available_cpus, plan_chunks, run_chunks, spawn_seeds
 from prs_geom.sweep import sweep
 
 SIZE = 200

@@ -24,7 +24,7 @@ from prs_geom.analysis import tolerance as T
 from prs_geom.analysis.contact import analyse_contact
 from prs_geom.analysis.loads import build_model
 from prs_geom.model.design import Tolerances, default_design
-from prs_geom.scaleout import available_cpus
+from prs_geom.runtime.scaleout import available_cpus
 
 
 def timed(fn, repeats=3):

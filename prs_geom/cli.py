@@ -32,11 +32,15 @@ from prs_geom.exports.output import check_output_dir
 from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, ResourceLimitError, parse_size
 from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
-from prs_geom.progress import ConsoleProgress, silent
+from prs_geom.runtime.progress import ConsoleProgress, silent
+
+__all__ = ["EXIT_OK", "EXIT_FOUND", "EXIT_INPUT", "EXIT_ENVIRONMENT", "EXIT_INTERNAL", "EXIT_SIGINT",
+           "EXIT_SIGTERM", "FLAG_OF_PARAMETER", "UsageError", "Terminated", "make_parser", "flag_named", "main",
+           "entry_point", "cmd_init", "cmd_validate", "cmd_build", "cmd_contact", "cmd_check", "cmd_loads",
+           "cmd_rating", "cmd_design_pitch", "cmd_tolerance", "cmd_sweep", "cmd_harmonic"]
 
 EXIT_OK, EXIT_FOUND, EXIT_INPUT, EXIT_ENVIRONMENT = 0, 1, 2, 3
 EXIT_INTERNAL, EXIT_SIGINT, EXIT_SIGTERM = 70, 130, 143
-#: Environment variable read as the default of ``--memory-budget``.
 
 
 class UsageError(PRSGeomError):
@@ -78,6 +82,56 @@ def _warn(design) -> None:
         print(f"warning: {msg}", file=sys.stderr)
 
 
+# --------------------------------------------------------------------------- shared arguments
+def _add_budget_arg(parser: argparse.ArgumentParser) -> None:
+    """``--memory-budget SIZE`` of the commands that mesh."""
+    parser.add_argument("--memory-budget", metavar="SIZE",
+                        help=f"largest estimated peak memory to accept, with a unit K, M or G, e.g. 8G or "
+                             f"512M (default: ${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
+
+
+def _add_design_arg(parser: argparse.ArgumentParser) -> None:
+    """The optional DESIGN file argument (the built-in default design without it)."""
+    parser.add_argument("design", nargs="?", metavar="DESIGN",
+                        help="design file (.toml or .json); the built-in default design if omitted")
+
+
+def _add_compliance_arg(parser: argparse.ArgumentParser) -> None:
+    """``--compliance analytic|fe`` of the commands that solve the load distribution."""
+    parser.add_argument("--compliance", choices=("analytic", "fe"),
+                        help="tooth compliance of the load model (default: the design's loads.compliance): "
+                             "'analytic' (Yamamoto) or 'fe' (finite-element influence matrices, computed once "
+                             "and cached; needs pip install \"prs-geom[fe]\"; docs/theory/fe.md)")
+
+
+def _add_error_args(parser: argparse.ArgumentParser) -> None:
+    """The error-model flags of the Monte Carlo commands (on top of the design's ``[tolerances]``)."""
+    group = parser.add_argument_group("error model (default: the design's [tolerances] section, else no error)")
+    group.add_argument("--flank-um", type=float, metavar="T", help="every loaded flank's axial position, +-T um")
+    group.add_argument("--roller-diameter-um", type=float, metavar="T", help="roller pitch diameter, +-T um")
+    group.add_argument("--eccentricity-um", type=float, metavar="T",
+                       help="screw and nut thread axis offset (half the run-out), T um")
+    group.add_argument("--lead-um", type=float, metavar="T", help="base-lead error over the engaged length, +-T um")
+    group.add_argument("--temperature-k", type=float, metavar="T", help="temperature difference of each part, +-T K")
+    group.add_argument("--distribution", choices=("uniform", "normal"),
+                       help="uniform within +-T (default) or normal with T = 3 sigma")
+    group.add_argument("--samples", type=int, metavar="N",
+                       help="Monte Carlo samples (default: the design's [tolerances], else 1000; "
+                            "200 for design-pitch --robust)")
+    group.add_argument("--seed", type=int, metavar="S", help="random seed (default 0)")
+
+
+def _add_execution_args(parser: argparse.ArgumentParser, workers_default: str = "one per CPU") -> None:
+    """The execution flags of every command that runs chunked work (validated by
+    :func:`_execution`); ``workers_default`` says what no ``--workers`` means."""
+    group = parser.add_argument_group("where the work runs (same seed, same numbers on any of them)")
+    group.add_argument("--workers", type=int, metavar="N",
+                       help=f"local worker processes (joblib; default {workers_default}, 1 = no extra process)")
+    group.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
+                       "or 'local' (needs pip install \"prs-geom[dask]\")")
+    group.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
+
+
 # --------------------------------------------------------------------------- commands
 def _write_out_file(path: str, text: str, force: bool) -> None:
     """Write a single output file: refused if it exists (unless ``force``), atomic."""
@@ -85,7 +139,19 @@ def _write_out_file(path: str, text: str, force: bool) -> None:
     write_file_atomic(target, text)
 
 
+def _add_init_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom init`` and its options."""
+    p = sub.add_parser("init", help="write the default design as a commented TOML file",
+                       description="Write the built-in default design as a commented TOML "
+                                   "design file (to stdout, or to --out).")
+    p.add_argument("--out", metavar="FILE", help="file to write instead of stdout (an existing file "
+                                                 "is refused unless --force)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.set_defaults(func=cmd_init)
+
+
 def cmd_init(args: argparse.Namespace) -> int:
+    """Write the default design as commented TOML to stdout or ``--out``; exit 0."""
     text = dumps_toml(default_design(), header=(
         "prs_geom design file (TOML). Units: mm, N, MPa; angles in degrees.\n"
         "Every key is optional; omitted keys take the built-in default.\n"
@@ -98,7 +164,21 @@ def cmd_init(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _add_validate_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom validate`` and its options."""
+    p = sub.add_parser("validate", help="check a design file and estimate the size of its build",
+                       description="Read and validate a design file (exit 2 with the field, value and "
+                                   "rule when it is invalid), print the sizing warnings and the "
+                                   "estimated mesh size and memory of a build. Writes nothing.")
+    _add_design_arg(p)
+    p.add_argument("--memory-budget", metavar="SIZE",
+                   help=f"check the estimate against this budget as build does, e.g. 8G or 512M "
+                        f"(default: ${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
+    p.set_defaults(func=cmd_validate)
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
+    """Validate a design (exit 2 naming the field), print its warnings and the build estimate; exit 0."""
     design = _load_any(args.design)
     _warn(design)
     if isinstance(design, PRSDesign):
@@ -134,7 +214,33 @@ def _inside(design_file: str | None, out: Path) -> list[str]:
     return [src.relative_to(folder).as_posix()] if folder in src.parents else []
 
 
+def _add_build_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom build`` and its options."""
+    p = sub.add_parser("build", help="run every stage and write all exports and report.json",
+                       description="Run every stage on a design and write all exports plus "
+                                   "report.json into an output folder, atomically: a failed "
+                                   "run leaves an earlier output untouched.")
+    _add_design_arg(p)
+    p.add_argument("--out", metavar="DIR", help="output folder (default exports/<design name>): a new "
+                                                "path, an empty folder or an earlier prs-geom output "
+                                                "folder; anything else is refused")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--screw", action="append", choices=["theoretical", "nominal"], metavar="KIND",
+                   help="screw meshes to export: screw.stl is always the theoretical screw (the state "
+                        "the analysis certifies); 'nominal' also writes screw_nominal.stl")
+    p.add_argument("--step", action="store_true",
+                   help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
+                        "pip install \"prs-geom[step]\"; several seconds)")
+    p.add_argument("--force", action="store_true",
+                   help="replace files of an earlier output that were edited since prs-geom wrote them "
+                        "(refused otherwise)")
+    _add_compliance_arg(p)
+    _add_budget_arg(p)
+    p.set_defaults(func=cmd_build)
+
+
 def cmd_build(args: argparse.Namespace) -> int:
+    """Run every stage and write all exports and report.json into the output folder (its path on stdout)."""
     from prs_geom.pipeline import build
 
     design = _load_any(args.design)
@@ -173,7 +279,20 @@ def _print_json(obj) -> None:
     print(json.dumps(obj, indent=2))
 
 
+def _add_contact_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom contact`` and its options."""
+    p = sub.add_parser("contact", help="screw-roller and roller-nut contact points and the "
+                                       "theoretical screw pitch diameter",
+                       description="Analytic contact points (collinear-normal Newton-Raphson) of "
+                                   "screw-roller and roller-nut, and the screw pitch diameter that "
+                                   "removes the interference. Angles: see docs/outputs.md 'Contact and interference'.")
+    _add_design_arg(p)
+    p.add_argument("--json", action="store_true", help="print the report.json 'contact' section")
+    p.set_defaults(func=cmd_contact)
+
+
 def cmd_contact(args: argparse.Namespace) -> int:
+    """Print the contact points and the theoretical screw pitch diameter (or the JSON section); exit 0."""
     from prs_geom.analysis.contact import contact_report
 
     design = _load(args.design)
@@ -203,7 +322,22 @@ def cmd_contact(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _add_check_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom check`` and its options."""
+    p = sub.add_parser("check", help="interference check of the assembly (exit 1 when parts interfere)",
+                       description="FCL collision of every pair of parts; manifold3d overlap volumes. "
+                                   "Exit code 1 when interference is found.")
+    _add_design_arg(p)
+    p.add_argument("--screw", choices=("corrected", "nominal"), default="corrected",
+                   help="screw pitch diameter: the theoretical one (default) or the nominal one")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    _add_budget_arg(p)
+    p.set_defaults(func=cmd_check)
+
+
 def cmd_check(args: argparse.Namespace) -> int:
+    """Interference check of the assembly; exit 1 when parts interfere."""
     from prs_geom.checks.interference import interference
 
     from prs_geom.mesh.budget import guard
@@ -229,7 +363,21 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_FOUND if rep["found"] else EXIT_OK
 
 
+def _add_loads_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom loads`` and its options."""
+    p = sub.add_parser("loads", help="load distribution over the thread teeth",
+                       description="Tooth loads (nonlinear Hertz + Yamamoto or finite-element teeth + "
+                                   "bodies) of the design's pitch lists, coefficients, stiffness, off-design "
+                                   "loads; with --compliance fe also the model risk.")
+    _add_design_arg(p)
+    p.add_argument("--load", type=float, metavar="N", help="axial load in N instead of the design load")
+    p.add_argument("--json", action="store_true", help="print the report.json 'loads' section")
+    _add_compliance_arg(p)
+    p.set_defaults(func=cmd_loads)
+
+
 def cmd_loads(args: argparse.Namespace) -> int:
+    """Print the tooth-load distribution (or the JSON section), with ``--compliance fe`` the model risk; exit 0."""
     from prs_geom.analysis.loads import loads_report
 
     design = _load(args.design)
@@ -289,7 +437,7 @@ def _with_compliance(design: PRSDesign, args: argparse.Namespace) -> PRSDesign:
 
         design = design.with_changes(loads=replace(design.loads, compliance=args.compliance))
     if design.loads.compliance == "fe":
-        from prs_geom.fe_cache import require_fe
+        from prs_geom.analysis.fe.cache import require_fe
 
         require_fe()
     return design
@@ -319,7 +467,32 @@ def _print_model_risk(risk, models) -> None:
     print(f"largest difference of a coefficient between the models: {risk.largest_model_difference:.4f}")
 
 
+def _add_rating_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom rating`` and its options."""
+    p = sub.add_parser("rating", help="load ratings, life, limits, efficiency and stiffness",
+                       description="Basic dynamic and static axial load ratings from the contact geometry, the "
+                                   "L10 life of a duty (catalogue form and from the actual tooth loads of constant, "
+                                   "equal-load and, with a spectrum, robust pitch), critical speed, buckling, nut "
+                                   "speed limit, efficiency, torques and axial stiffness with a preloaded double "
+                                   "nut (docs/theory/ratings.md). Defaults come from the design's [rating] and "
+                                   "[supports] sections.")
+    _add_design_arg(p)
+    p.add_argument("--spectrum", metavar="FILE", help="duty cycle: [[case]] load_n, time_share, speed_rpm (speeds "
+                                                      "required); also designs the robust pitch for it")
+    p.add_argument("--mean-load", type=float, metavar="N", help="equivalent load F_m (N) instead of the design load")
+    p.add_argument("--speed-rpm", type=float, metavar="R", help="mean screw speed n_m (rpm; default rating.speed_rpm)")
+    p.add_argument("--life-hours", type=float, metavar="H", help="target life for the required dynamic load rating (h)")
+    p.add_argument("--fw", type=float, metavar="F", help="operating factor f_w, 1 to 5 (default rating.operating_factor)")
+    p.add_argument("--reliability", type=float, metavar="PCT", help="reliability of the life, 90 to 99 %% (default 90)")
+    p.add_argument("--json", action="store_true", help="print the report.json 'rating' section")
+    p.add_argument("--strict", action="store_true",
+                   help="exit 1 when a limit check fails (speed, d n, critical speed, buckling, static safety); "
+                        "without it a failed check is a warning on stderr and the exit code is 0")
+    p.set_defaults(func=cmd_rating)
+
+
 def cmd_rating(args: argparse.Namespace) -> int:
+    """Print the ratings, lives, limit checks, efficiency and stiffness; exit 1 on a failed limit with ``--strict``."""
     from prs_geom.analysis.contact import analyse_contact
     from prs_geom.analysis.rating import analyse_rating, rating_case
 
@@ -365,7 +538,7 @@ def cmd_rating(args: argparse.Namespace) -> int:
 def _table(rows: list[list[str]], min_widths: Sequence[int]) -> list[str]:
     """Lines of a text table: the first column left-aligned, the others right-aligned; each
     column is its minimum width, widened so that at least two spaces always separate it from
-    the next (no two columns ever touch, whatever the numbers: issue 28)."""
+    the next (no two columns ever touch, whatever the numbers)."""
     widths = [max(w, max(len(r[i]) for r in rows) + 2) for i, w in enumerate(min_widths)]
     return ["".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in enumerate(zip(r, widths))).rstrip()
             for r in rows]
@@ -443,7 +616,36 @@ def _read_target(path: str, n: int) -> tuple[list[float], list[float]]:
     return out[0], out[1]
 
 
+def _add_design_pitch_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom design-pitch`` and its options."""
+    p = sub.add_parser("design-pitch", help="pitch lists for equal (or target) load sharing",
+                       description="Roller and nut pitch lists that give equal load sharing (every "
+                                   "coefficient 1) or a target distribution at the design load, "
+                                   "written into a new design file ready for build.")
+    _add_design_arg(p)
+    p.add_argument("--target", default="equal", metavar="equal|FILE",
+                   help="'equal' (default) or a .json/.toml file {nut_roller: [...], roller_screw: [...]} "
+                        "or a .csv with columns tooth,nut_roller,roller_screw (n coefficients each, mean 1)")
+    p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout); an "
+                                                     "existing file is refused unless --force")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--name", help="name of the new design (default <name>-graded, <name>-robust)")
+    p.add_argument("--robust", action="store_true",
+                   help="minimise a quantile of the worst LDC over a load spectrum and the error model "
+                        "instead of equal sharing at the design load (docs/theory/tolerances.md)")
+    p.add_argument("--spectrum", metavar="FILE", help="with --robust: load spectrum ([[case]] load_n, "
+                                                      "time_share, speed_rpm); default the design load")
+    p.add_argument("--quantile", type=float, metavar="Q", help="with --robust: the quantile minimised (0.95)")
+    p.add_argument("--json", action="store_true", help="with --robust: print the comparison as JSON "
+                                                       "(the design goes to --out)")
+    _add_compliance_arg(p)
+    _add_error_args(p)
+    _add_execution_args(p)
+    p.set_defaults(func=cmd_design_pitch)
+
+
 def cmd_design_pitch(args: argparse.Namespace) -> int:
+    """Write a design with equal-load (or target, or ``--robust``) pitch lists to stdout or ``--out``; exit 0."""
     from prs_geom.analysis.loads import design_pitches, forward, with_pitch_lists
 
     design = _load(args.design)
@@ -482,29 +684,25 @@ def cmd_design_pitch(args: argparse.Namespace) -> int:
 
 
 def _execution(args: argparse.Namespace, quiet: bool):
-    """Where the chunks of a study run (--workers, --scheduler, --dask-workers)."""
+    """Where the chunks of a command's work run (the flags of :func:`_add_execution_args`),
+    checked before any work: counts >= 1, joblib and Dask not both (the scale-out's own rule,
+    named by its parameters, which :func:`main` prints as the flags), the Dask extra present."""
+    from prs_geom.runtime.scaleout import require_dask, resolve_backend
     from prs_geom.studies import Execution
 
-    from prs_geom.scaleout import resolve_backend
-
-    if args.workers is not None and args.workers < 1:
-        raise DesignError("--workers", args.workers, "must be >= 1")
-    if args.dask_workers is not None and args.dask_workers < 1:
-        raise DesignError("--dask-workers", args.dask_workers, "must be >= 1")
-    try:   # validate the combination up front, under the flags' own names
-        backend = resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
-    except DesignError as exc:
-        raise exc.renamed("--" + exc.field.replace("_", "-")) from None
+    for parameter in ("workers", "dask_workers"):
+        count = getattr(args, parameter)
+        if count is not None and count < 1:
+            raise DesignError(parameter, count, "must be >= 1")
+    backend = resolve_backend(2, workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers)
     if backend.kind == "dask":
-        from prs_geom.scaleout import require_dask
-
         require_dask()   # a missing extra is known before any work (exit 3)
     return Execution(workers=args.workers, scheduler=args.scheduler, dask_workers=args.dask_workers,
                      progress=silent if quiet else args.progress)
 
 
 def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
-    """The design's [tolerances] (or none) with the flags on top; flags name themselves in errors."""
+    """The design's [tolerances] (or none) with the flags on top."""
     from dataclasses import replace
 
     from prs_geom.model.design import Tolerances
@@ -528,99 +726,149 @@ def _cli_tolerances(args: argparse.Namespace, design: PRSDesign):
         changes["source"] = design.tolerances.source + " (changed on the command line)"
     elif changes:
         changes["source"] = "given on the command line"
-    try:
-        return replace(base, **changes)
-    except DesignError as exc:
-        flag = {"screw_eccentricity_um": "eccentricity_um", "nut_eccentricity_um": "eccentricity_um",
-                "load_fractions": "load_fraction"}.get(exc.field.split("[")[0], exc.field.split("[")[0])
-        raise exc.renamed("--" + flag.replace("_", "-")) from None
+    return replace(base, **changes)   # a bad value names its field, main() prints the flag
+
+
+def _add_tolerance_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom tolerance`` and its options."""
+    p = sub.add_parser("tolerance", help="load sharing under manufacturing errors; tolerance synthesis",
+                       description="Monte Carlo study of the worst load-distribution coefficient and the "
+                                   "roller load share under the error model, all rollers side by side "
+                                   "(docs/theory/tolerances.md). With --target-ldc: the largest flank "
+                                   "tolerance that meets it with probability --confidence.")
+    _add_design_arg(p)
+    _add_error_args(p)
+    p.add_argument("--load-fraction", type=float, nargs="+", action="extend", metavar="F",
+                   help="loads as fractions of the design load (default: the design's, else 1)")
+    p.add_argument("--spectrum", metavar="FILE", help="loads from a spectrum file ([[case]] load_n, time_share)")
+    p.add_argument("--target-ldc", type=float, metavar="L", help="synthesise: worst LDC to hold")
+    p.add_argument("--confidence", type=float, metavar="C",
+                   help="with --target-ldc: probability of holding it (default 0.95, as a Clopper-Pearson "
+                        "bound); without: report the worst LDC not exceeded with probability C")
+    p.add_argument("--out", metavar="NEW.toml", help="with --target-ldc: write the design with the "
+                                                     "synthesised [tolerances] section")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    _add_execution_args(p)
+    p.set_defaults(func=cmd_tolerance)
 
 
 def cmd_tolerance(args: argparse.Namespace) -> int:
+    """The Monte Carlo study of the design's error model, or with ``--target-ldc`` the
+    tolerance synthesis (exit 1 when the target cannot be met)."""
     from prs_geom import studies
-    from prs_geom.model.io import load_spectrum
 
     design = _load(args.design)
     _warn(design)
     tols = _cli_tolerances(args, design)
     execution = _execution(args, quiet=args.json or args.quiet)
-    loads = None
-    if args.spectrum:
-        if args.load_fraction:
-            raise UsageError("give --spectrum or --load-fraction, not both")
-        loads = load_spectrum(args.spectrum).loads_n
-    if args.confidence is not None and not 0.0 < args.confidence < 1.0:
-        raise DesignError("--confidence", args.confidence, "must be in (0, 1)")
+    loads = _spectrum_loads(args)
+    if args.confidence is not None:
+        studies.check_probability("confidence", args.confidence)
     if args.target_ldc is not None:
-        if args.flank_um is not None:
-            raise UsageError("--flank-um and --target-ldc: the synthesis chooses the flank tolerance; "
-                             "leave out --flank-um")
-        if args.confidence is None:
-            args.confidence = 0.95
-        if args.out:
-            check_output_file(args.out, args.force)        # refuse before the work
-        F0 = design.loading.axial_load_n
-        fractions = tols.load_fractions if loads is None else tuple(F / F0 for F in loads)
-        res = studies.synthesise(design, args.target_ldc, args.confidence, tols, samples=tols.samples,
-                                 seed=tols.seed, load_fractions=fractions, execution=execution,
-                                 model=_design_model(design))
-        out = {"samples": tols.samples, "seed": tols.seed, "synthesis": res.report()}
-        if res.feasible and args.out:
-            from dataclasses import replace
-            new = replace(design, tolerances=res.tolerances)
-            _write_out_file(args.out, dumps_toml(new, header=(
-                f"'{design.name}' with flank tolerances synthesised by prs-geom tolerance:\n"
-                f"{res.tolerances.source}")), args.force)
-            if not args.json:
-                print(f"wrote {args.out}", file=sys.stderr)
-        if args.json:
-            _print_json(out)
-        else:
-            _print_synthesis(res)
-        return EXIT_OK if res.feasible else EXIT_FOUND
+        return _tolerance_synthesis(args, design, tols, loads, execution)
     if args.out:
         raise UsageError("--out writes synthesised tolerances: give --target-ldc")
-    error_flags = ("flank_um", "roller_diameter_um", "eccentricity_um", "lead_um", "temperature_k")
-    if all(getattr(args, f, None) is None for f in error_flags):
-        # no [tolerances] and no error flag: a study of zero errors says nothing; the library's
-        # rule names the design field, the command line adds its flags
-        try:
-            studies.require_error_model(design)
-        except DesignError:
-            raise UsageError(
-                "no error model: the design has no [tolerances] section and no error flag was given (a study "
-                "of zero errors only repeats the loads). Give the design a [tolerances] section (e.g. flank_um "
-                "= 0.5; docs/theory/tolerances.md) or the errors on the command line: "
-                + ", ".join("--" + f.replace("_", "-") + " T" for f in error_flags)) from None
+    _require_cli_error_model(args, design)
     study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence,
                                     model=_design_model(design))
     if args.json:
         _print_json(study.section)
-        return EXIT_OK
-    s = study.section
+    else:
+        _print_tolerance_study(design, tols, study.section)
+    return EXIT_OK
+
+
+def _spectrum_loads(args: argparse.Namespace) -> tuple[float, ...] | None:
+    """The loads (N) of ``--spectrum``, None without one; refused beside ``--load-fraction``."""
+    if not args.spectrum:
+        return None
+    if args.load_fraction:
+        raise UsageError("give --spectrum or --load-fraction, not both")
+    from prs_geom.model.io import load_spectrum
+
+    return load_spectrum(args.spectrum).loads_n
+
+
+#: The flags that give a term of the error model (a study needs one of them or [tolerances]).
+_ERROR_FLAGS = ("flank_um", "roller_diameter_um", "eccentricity_um", "lead_um", "temperature_k")
+
+
+def _require_cli_error_model(args: argparse.Namespace, design: PRSDesign) -> None:
+    """Refuse a study without an error model: no ``[tolerances]`` and no error flag. The
+    library's rule names the design field; the message here adds the flags."""
+    from prs_geom import studies
+
+    if any(getattr(args, flag, None) is not None for flag in _ERROR_FLAGS):
+        return
+    try:
+        studies.require_error_model(design)
+    except DesignError:
+        raise UsageError(
+            "no error model: the design has no [tolerances] section and no error flag was given (a study "
+            "of zero errors only repeats the loads). Give the design a [tolerances] section (e.g. flank_um "
+            "= 0.5; docs/theory/tolerances.md) or the errors on the command line: "
+            + ", ".join("--" + flag.replace("_", "-") + " T" for flag in _ERROR_FLAGS)) from None
+
+
+def _tolerance_synthesis(args: argparse.Namespace, design: PRSDesign, tols, loads, execution) -> int:
+    """``tolerance --target-ldc``: synthesise the flank tolerances, print them (or JSON) and
+    write the design with them to ``--out``; exit 1 when the target cannot be met."""
+    from dataclasses import replace
+
+    from prs_geom import studies
+
+    if args.flank_um is not None:
+        raise UsageError("--flank-um and --target-ldc: the synthesis chooses the flank tolerance; "
+                         "leave out --flank-um")
+    confidence = 0.95 if args.confidence is None else args.confidence
+    if args.out:
+        check_output_file(args.out, args.force)        # refuse before the work
+    design_load = design.loading.axial_load_n
+    fractions = tols.load_fractions if loads is None else tuple(load / design_load for load in loads)
+    res = studies.synthesise(design, args.target_ldc, confidence, tols, samples=tols.samples,
+                             seed=tols.seed, load_fractions=fractions, execution=execution,
+                             model=_design_model(design))
+    if res.feasible and args.out:
+        new = replace(design, tolerances=res.tolerances)
+        _write_out_file(args.out, dumps_toml(new, header=(
+            f"'{design.name}' with flank tolerances synthesised by prs-geom tolerance:\n"
+            f"{res.tolerances.source}")), args.force)
+        if not args.json:
+            print(f"wrote {args.out}", file=sys.stderr)
+    if args.json:
+        _print_json({"samples": tols.samples, "seed": tols.seed, "synthesis": res.report()})
+    else:
+        _print_synthesis(res)
+    return EXIT_OK if res.feasible else EXIT_FOUND
+
+
+def _print_tolerance_study(design: PRSDesign, tols, section: dict) -> None:
+    """The text output of ``prs-geom tolerance``: the error model, the worst coefficient per
+    load and over all loads, the quantile at ``--confidence`` and the importance ranking."""
     per = [v for v in tols.flank_tolerances_um(design.thread.engaged_teeth).values()]
     flank = (f"{tols.flank_um:g} um" if all(x == tols.flank_um for v in per for x in v)
              else f"per tooth {min(min(v) for v in per):g}-{max(max(v) for v in per):g} um")
-    print(f"design {design.name}: {s['samples']} samples (seed {s['seed']}), {tols.distribution} errors: "
-          f"flank {flank}, roller diameter {tols.roller_diameter_um:g} um, eccentricity "
+    print(f"design {design.name}: {section['samples']} samples (seed {section['seed']}), {tols.distribution} "
+          f"errors: flank {flank}, roller diameter {tols.roller_diameter_um:g} um, eccentricity "
           f"{tols.screw_eccentricity_um:g}/{tols.nut_eccentricity_um:g} um (screw/nut), lead {tols.lead_um:g} um, "
           f"temperature {tols.temperature_k:g} K")
     print(f"{'load':>8} {'no error':>9} {'median':>8} {'p95':>8} {'p99':>8} {'max':>8} {'roller share max p95':>21}")
-    for c in s["cases"]:
-        w = c["worst_ldc"]
-        print(f"{c['load_fraction'] * 100:7.0f}% {c['deterministic']['worst_ldc']:9.4f} {w['median']:8.4f} "
-              f"{w['p95']:8.4f} {w['p99']:8.4f} {w['max']:8.4f} {c['roller_load_share_max']['p95']:21.4f}")
-    w = s["worst_ldc"]
+    for case in section["cases"]:
+        w = case["worst_ldc"]
+        print(f"{case['load_fraction'] * 100:7.0f}% {case['deterministic']['worst_ldc']:9.4f} {w['median']:8.4f} "
+              f"{w['p95']:8.4f} {w['p99']:8.4f} {w['max']:8.4f} {case['roller_load_share_max']['p95']:21.4f}")
+    w = section["worst_ldc"]
     print(f"worst LDC over all loads: median {w['median']:.4f}, p95 {w['p95']:.4f}, p99 {w['p99']:.4f}, "
           f"max {w['max']:.4f}")
-    if "at_confidence" in s:
-        a = s["at_confidence"]
-        ub = "n/a (too few samples)" if a["upper_bound_95"] is None else f"{a['upper_bound_95']:.4f}"
-        print(f"with probability {a['confidence']:g}: worst LDC <= {a['worst_ldc_quantile']:.4f} "
-              f"(95 % upper bound {ub})")
-    for row in s["importance"]:
+    if "at_confidence" in section:
+        at = section["at_confidence"]
+        bound = "n/a (too few samples)" if at["upper_bound_95"] is None else f"{at['upper_bound_95']:.4f}"
+        print(f"with probability {at['confidence']:g}: worst LDC <= {at['worst_ldc_quantile']:.4f} "
+              f"(95 % upper bound {bound})")
+    for row in section["importance"]:
         print(f"  {row['term']:<20} {row['share'] * 100:6.1f} % of the variance")
-    return EXIT_OK
 
 
 def _print_synthesis(res) -> None:
@@ -681,18 +929,76 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
     return EXIT_OK
 
 
+def _add_sweep_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom sweep`` and its options."""
+    from prs_geom.sweep import SERIAL_BELOW
+
+    p = sub.add_parser("sweep", help="design-space sweep: every combination of starts, rollers, pitch, teeth",
+                       description="Evaluate every combination of the given screw/nut starts, roller counts, "
+                                   "pitches, engaged teeth and load fractions on a base design: validity (or "
+                                   "the rule a point breaks), worst LDC at constant pitch and of the equal-load "
+                                   "graded design at 25/50/100/150 % load, axial stiffness and the largest "
+                                   "pitch correction (docs/scaleout.md).")
+    _add_design_arg(p)
+    p.add_argument("--starts", type=int, nargs="+", action="extend", metavar="N",
+                   help="screw and nut starts to sweep (default: the design's)")
+    p.add_argument("--rollers", type=int, nargs="+", action="extend", metavar="Z",
+                   help="roller counts to sweep (default: the design's)")
+    p.add_argument("--pitch", type=float, nargs="+", action="extend", metavar="MM",
+                   help="axial pitches in mm to sweep (default: the design's)")
+    p.add_argument("--teeth", type=int, nargs="+", action="extend", metavar="N",
+                   help="engaged teeth to sweep (default: the design's)")
+    p.add_argument("--loads", type=float, nargs="+", action="extend", metavar="FRACTION",
+                   help="design loads to sweep as fractions of the design's (default 1)")
+    _add_execution_args(p, workers_default=f"one per CPU, none for fewer than {SERIAL_BELOW} points")
+    p.add_argument("--json", action="store_true", help="print the table as JSON (columns with units, rows)")
+    p.add_argument("--out", metavar="FILE.csv", help="also write the table as CSV (an existing file is "
+                                                     "refused unless --force)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=cmd_sweep)
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from prs_geom import sweep
+    """Run the sweep, print the table (or JSON) and write the CSV of ``--out``; exit 0 however
+    many points are invalid (they are rows of the table)."""
+    import json
+
+    from prs_geom.sweep import print_table, sweep
 
     design = _load(args.design)
     _warn(design)
+    execution = _execution(args, quiet=args.json or args.quiet)
     if args.out:
         check_output_file(args.out, args.force)        # refuse before the work
-    return sweep.run(args, design, progress=args.progress,
-                     write_out=lambda text: _write_out_file(args.out, text, args.force))
+    result = sweep(design, starts=args.starts, rollers=args.rollers, pitch_mm=args.pitch, teeth=args.teeth,
+                   loads=args.loads, workers=execution.workers, scheduler=execution.scheduler,
+                   dask_workers=execution.dask_workers, progress=args.progress)
+    if args.json:
+        print(json.dumps(result.to_json(), indent=2))
+    else:
+        print_table(result)
+    if args.out:
+        _write_out_file(args.out, result.csv_text(), args.force)
+        print(f"wrote {args.out}: {result.summary()}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _add_harmonic_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    """The sub-command ``prs-geom harmonic`` and its options."""
+    p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
+                       description="Ratio of the conical-circular-spline harmonic friction drive "
+                                   "(docs/theory/harmonic.md) as a function of the axial position a.")
+    p.add_argument("design", nargs="?", metavar="FILE",
+                   help="harmonic design file (kind = \"harmonic\"); the worked example if omitted")
+    p.add_argument("--a", type=float, nargs="+", action="extend", metavar="A",
+                   help="positions a (mm) to tabulate; repeat or list several")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=cmd_harmonic)
 
 
 def cmd_harmonic(args: argparse.Namespace) -> int:
+    """Tabulate the harmonic drive's ratio over the axial position (or JSON); exit 0."""
     import numpy as np
 
     from prs_geom.harmonic.model import HarmonicDesign, harmonic_report
@@ -729,7 +1035,15 @@ def cmd_harmonic(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------- parser
+#: The sub-command builders, in the order ``prs-geom --help`` lists them.
+_COMMANDS = (_add_init_parser, _add_validate_parser, _add_build_parser, _add_contact_parser, _add_check_parser,
+             _add_loads_parser, _add_rating_parser, _add_design_pitch_parser, _add_tolerance_parser,
+             _add_sweep_parser, _add_harmonic_parser)
+
+
 def make_parser() -> argparse.ArgumentParser:
+    """The parser of ``prs-geom``: the top-level options and every sub-command (each built next
+    to its handler, in :data:`_COMMANDS` order)."""
     parser = argparse.ArgumentParser(
         prog="prs-geom",
         description="Planetary roller screw geometry: thread meshes, contact points, load "
@@ -739,211 +1053,34 @@ def make_parser() -> argparse.ArgumentParser:
                         help="show tracebacks on errors (accepted anywhere on the command line)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-
-    p = sub.add_parser("init", help="write the default design as a commented TOML file",
-                       description="Write the built-in default design as a commented TOML "
-                                   "design file (to stdout, or to --out).")
-    p.add_argument("--out", metavar="FILE", help="file to write instead of stdout (an existing file "
-                                                 "is refused unless --force)")
-    p.add_argument("--force", action="store_true", help="replace an existing --out file")
-    p.set_defaults(func=cmd_init)
-
-    p = sub.add_parser("validate", help="check a design file and estimate the size of its build",
-                       description="Read and validate a design file (exit 2 with the field, value and "
-                                   "rule when it is invalid), print the sizing warnings and the "
-                                   "estimated mesh size and memory of a build. Writes nothing.")
-    p.add_argument("design", nargs="?", metavar="DESIGN",
-                   help="design file (.toml or .json); the built-in default design if omitted")
-    p.add_argument("--memory-budget", metavar="SIZE",
-                   help=f"check the estimate against this budget as build does, e.g. 8G or 512M "
-                        f"(default: ${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
-    p.set_defaults(func=cmd_validate)
-
-    def budget_arg(q: argparse.ArgumentParser) -> None:
-        q.add_argument("--memory-budget", metavar="SIZE",
-                       help=f"largest estimated peak memory to accept, with a unit K, M or G, e.g. 8G or 512M (default: "
-                            f"${MEMORY_BUDGET_ENV}, else 60%% of the available memory)")
-
-    def design_arg(q: argparse.ArgumentParser) -> None:
-        q.add_argument("design", nargs="?", metavar="DESIGN",
-                       help="design file (.toml or .json); the built-in default design if omitted")
-
-    def scale_args(q: argparse.ArgumentParser) -> None:
-        g = q.add_argument_group("where the work runs (same seed, same numbers on any of them)")
-        g.add_argument("--workers", type=int, metavar="N",
-                       help="local worker processes (joblib; default one per CPU, 1 = no extra process)")
-        g.add_argument("--scheduler", metavar="URL", help="an existing Dask scheduler, e.g. tcp://host:8786, "
-                       "or 'local' (needs pip install \"prs-geom[dask]\")")
-        g.add_argument("--dask-workers", type=int, metavar="N", help="start a local Dask cluster of N processes")
-
-    def compliance_arg(q: argparse.ArgumentParser) -> None:
-        q.add_argument("--compliance", choices=("analytic", "fe"),
-                       help="tooth compliance of the load model (default: the design's loads.compliance): "
-                            "'analytic' (Yamamoto) or 'fe' (finite-element influence matrices, computed once "
-                            "and cached; needs pip install \"prs-geom[fe]\"; docs/theory/fe.md)")
-
-    def error_args(q: argparse.ArgumentParser) -> None:
-        g = q.add_argument_group("error model (default: the design's [tolerances] section, else no error)")
-        g.add_argument("--flank-um", type=float, metavar="T", help="every loaded flank's axial position, +-T um")
-        g.add_argument("--roller-diameter-um", type=float, metavar="T", help="roller pitch diameter, +-T um")
-        g.add_argument("--eccentricity-um", type=float, metavar="T",
-                       help="screw and nut thread axis offset (half the run-out), T um")
-        g.add_argument("--lead-um", type=float, metavar="T", help="base-lead error over the engaged length, +-T um")
-        g.add_argument("--temperature-k", type=float, metavar="T", help="temperature difference of each part, +-T K")
-        g.add_argument("--distribution", choices=("uniform", "normal"),
-                       help="uniform within +-T (default) or normal with T = 3 sigma")
-        g.add_argument("--samples", type=int, metavar="N",
-                       help="Monte Carlo samples (default: the design's [tolerances], else 1000; "
-                            "200 for design-pitch --robust)")
-        g.add_argument("--seed", type=int, metavar="S", help="random seed (default 0)")
-
-    p = sub.add_parser("build", help="run every stage and write all exports and report.json",
-                       description="Run every stage on a design and write all exports plus "
-                                   "report.json into an output folder, atomically: a failed "
-                                   "run leaves an earlier output untouched.")
-    design_arg(p)
-    p.add_argument("--out", metavar="DIR", help="output folder (default exports/<design name>): a new "
-                                                "path, an empty folder or an earlier prs-geom output "
-                                                "folder; anything else is refused")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    p.add_argument("--screw", action="append", choices=["theoretical", "nominal"], metavar="KIND",
-                   help="screw meshes to export: screw.stl is always the theoretical screw (the state "
-                        "the analysis certifies); 'nominal' also writes screw_nominal.stl")
-    p.add_argument("--step", action="store_true",
-                   help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
-                        "pip install \"prs-geom[step]\"; several seconds)")
-    p.add_argument("--force", action="store_true",
-                   help="replace files of an earlier output that were edited since prs-geom wrote them "
-                        "(refused otherwise)")
-    compliance_arg(p)
-    budget_arg(p)
-    p.set_defaults(func=cmd_build)
-
-    p = sub.add_parser("contact", help="screw-roller and roller-nut contact points and the "
-                                       "theoretical screw pitch diameter",
-                       description="Analytic contact points (collinear-normal Newton-Raphson) of "
-                                   "screw-roller and roller-nut, and the screw pitch diameter that "
-                                   "removes the interference. Angles: see docs/outputs.md 'Contact and interference'.")
-    design_arg(p)
-    p.add_argument("--json", action="store_true", help="print the report.json 'contact' section")
-    p.set_defaults(func=cmd_contact)
-
-    p = sub.add_parser("check", help="interference check of the assembly (exit 1 when parts interfere)",
-                       description="FCL collision of every pair of parts; manifold3d overlap volumes. "
-                                   "Exit code 1 when interference is found.")
-    design_arg(p)
-    p.add_argument("--screw", choices=("corrected", "nominal"), default="corrected",
-                   help="screw pitch diameter: the theoretical one (default) or the nominal one")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    budget_arg(p)
-    p.set_defaults(func=cmd_check)
-
-    p = sub.add_parser("loads", help="load distribution over the thread teeth",
-                       description="Tooth loads (nonlinear Hertz + Yamamoto or finite-element teeth + "
-                                   "bodies) of the design's pitch lists, coefficients, stiffness, off-design "
-                                   "loads; with --compliance fe also the model risk.")
-    design_arg(p)
-    p.add_argument("--load", type=float, metavar="N", help="axial load in N instead of the design load")
-    p.add_argument("--json", action="store_true", help="print the report.json 'loads' section")
-    compliance_arg(p)
-    p.set_defaults(func=cmd_loads)
-
-    p = sub.add_parser("rating", help="load ratings, life, limits, efficiency and stiffness",
-                       description="Basic dynamic and static axial load ratings from the contact geometry, the "
-                                   "L10 life of a duty (catalogue form and from the actual tooth loads of constant, "
-                                   "equal-load and, with a spectrum, robust pitch), critical speed, buckling, nut "
-                                   "speed limit, efficiency, torques and axial stiffness with a preloaded double "
-                                   "nut (docs/theory/ratings.md). Defaults come from the design's [rating] and "
-                                   "[supports] sections.")
-    design_arg(p)
-    p.add_argument("--spectrum", metavar="FILE", help="duty cycle: [[case]] load_n, time_share, speed_rpm (speeds "
-                                                      "required); also designs the robust pitch for it")
-    p.add_argument("--mean-load", type=float, metavar="N", help="equivalent load F_m (N) instead of the design load")
-    p.add_argument("--speed-rpm", type=float, metavar="R", help="mean screw speed n_m (rpm; default rating.speed_rpm)")
-    p.add_argument("--life-hours", type=float, metavar="H", help="target life for the required dynamic load rating (h)")
-    p.add_argument("--fw", type=float, metavar="F", help="operating factor f_w, 1 to 5 (default rating.operating_factor)")
-    p.add_argument("--reliability", type=float, metavar="PCT", help="reliability of the life, 90 to 99 %% (default 90)")
-    p.add_argument("--json", action="store_true", help="print the report.json 'rating' section")
-    p.add_argument("--strict", action="store_true",
-                   help="exit 1 when a limit check fails (speed, d n, critical speed, buckling, static safety); "
-                        "without it a failed check is a warning on stderr and the exit code is 0")
-    p.set_defaults(func=cmd_rating)
-
-    p = sub.add_parser("design-pitch", help="pitch lists for equal (or target) load sharing",
-                       description="Roller and nut pitch lists that give equal load sharing (every "
-                                   "coefficient 1) or a target distribution at the design load, "
-                                   "written into a new design file ready for build.")
-    design_arg(p)
-    p.add_argument("--target", default="equal", metavar="equal|FILE",
-                   help="'equal' (default) or a .json/.toml file {nut_roller: [...], roller_screw: [...]} "
-                        "or a .csv with columns tooth,nut_roller,roller_screw (n coefficients each, mean 1)")
-    p.add_argument("--out", metavar="NEW.toml", help="design file to write (default: stdout); an "
-                                                     "existing file is refused unless --force")
-    p.add_argument("--force", action="store_true", help="replace an existing --out file")
-    p.add_argument("--name", help="name of the new design (default <name>-graded, <name>-robust)")
-    p.add_argument("--robust", action="store_true",
-                   help="minimise a quantile of the worst LDC over a load spectrum and the error model "
-                        "instead of equal sharing at the design load (docs/theory/tolerances.md)")
-    p.add_argument("--spectrum", metavar="FILE", help="with --robust: load spectrum ([[case]] load_n, "
-                                                      "time_share, speed_rpm); default the design load")
-    p.add_argument("--quantile", type=float, metavar="Q", help="with --robust: the quantile minimised (0.95)")
-    p.add_argument("--json", action="store_true", help="with --robust: print the comparison as JSON "
-                                                       "(the design goes to --out)")
-    compliance_arg(p)
-    error_args(p)
-    scale_args(p)
-    p.set_defaults(func=cmd_design_pitch)
-
-    p = sub.add_parser("tolerance", help="load sharing under manufacturing errors; tolerance synthesis",
-                       description="Monte Carlo study of the worst load-distribution coefficient and the "
-                                   "roller load share under the error model, all rollers side by side "
-                                   "(docs/theory/tolerances.md). With --target-ldc: the largest flank "
-                                   "tolerance that meets it with probability --confidence.")
-    design_arg(p)
-    error_args(p)
-    p.add_argument("--load-fraction", type=float, nargs="+", action="extend", metavar="F",
-                   help="loads as fractions of the design load (default: the design's, else 1)")
-    p.add_argument("--spectrum", metavar="FILE", help="loads from a spectrum file ([[case]] load_n, time_share)")
-    p.add_argument("--target-ldc", type=float, metavar="L", help="synthesise: worst LDC to hold")
-    p.add_argument("--confidence", type=float, metavar="C",
-                   help="with --target-ldc: probability of holding it (default 0.95, as a Clopper-Pearson "
-                        "bound); without: report the worst LDC not exceeded with probability C")
-    p.add_argument("--out", metavar="NEW.toml", help="with --target-ldc: write the design with the "
-                                                     "synthesised [tolerances] section")
-    p.add_argument("--force", action="store_true", help="replace an existing --out file")
-    p.add_argument("--json", action="store_true", help="print the result as one JSON object")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    scale_args(p)
-    p.set_defaults(func=cmd_tolerance)
-
-    from prs_geom import sweep as sweep_cli
-
-    p = sub.add_parser("sweep", help="design-space sweep: every combination of starts, rollers, pitch, teeth",
-                       description="Evaluate every combination of the given screw/nut starts, roller counts, "
-                                   "pitches, engaged teeth and load fractions on a base design: validity (or "
-                                   "the rule a point breaks), worst LDC at constant pitch and of the equal-load "
-                                   "graded design at 25/50/100/150 % load, axial stiffness and the largest "
-                                   "pitch correction (docs/scaleout.md).")
-    design_arg(p)
-    sweep_cli.add_arguments(p)
-    p.set_defaults(func=cmd_sweep)
-
-    p = sub.add_parser("harmonic", help="stepless harmonic friction drive calculator",
-                       description="Ratio of the conical-circular-spline harmonic friction drive "
-                                   "(docs/theory/harmonic.md) as a function of the axial position a.")
-    p.add_argument("design", nargs="?", metavar="FILE",
-                   help="harmonic design file (kind = \"harmonic\"); the worked example if omitted")
-    p.add_argument("--a", type=float, nargs="+", action="extend", metavar="A",
-                   help="positions a (mm) to tabulate; repeat or list several")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.set_defaults(func=cmd_harmonic)
+    for add_command in _COMMANDS:
+        add_command(sub)
     # every command takes --quiet (no progress display; warnings and errors still print)
-    for q in sub.choices.values():
-        if not any("--quiet" in a.option_strings for a in q._actions):
-            q.add_argument("--quiet", action="store_true", help="no progress display (warnings and errors "
-                                                                "still print)")
+    for command in sub.choices.values():
+        if not any("--quiet" in action.option_strings for action in command._actions):
+            command.add_argument("--quiet", action="store_true",
+                                 help="no progress display (warnings and errors still print)")
     return parser
+
+
+#: Parameters of the library that a command-line flag sets, with that flag: a library error
+#: names the parameter (or design field); :func:`main` prints the flag the user typed.
+FLAG_OF_PARAMETER = {
+    "workers": "--workers", "scheduler": "--scheduler", "dask_workers": "--dask-workers",
+    "confidence": "--confidence", "target_ldc": "--target-ldc", "quantile": "--quantile",
+    "samples": "--samples", "seed": "--seed", "distribution": "--distribution",
+    "flank_um": "--flank-um", "roller_diameter_um": "--roller-diameter-um",
+    "screw_eccentricity_um": "--eccentricity-um", "nut_eccentricity_um": "--eccentricity-um",
+    "lead_um": "--lead-um", "temperature_k": "--temperature-k", "load_fractions": "--load-fraction",
+}
+
+
+def flag_named(exc: DesignError) -> DesignError:
+    """``exc`` under the command-line flag of its field (:data:`FLAG_OF_PARAMETER`; an index
+    such as ``[2]`` is kept), or ``exc`` itself when no flag sets that field."""
+    parameter, bracket, index = exc.field.partition("[")
+    flag = FLAG_OF_PARAMETER.get(parameter)
+    return exc if flag is None else exc.renamed(flag + bracket + index)
 
 
 def _one_line(exc: OSError) -> str:
@@ -953,7 +1090,34 @@ def _one_line(exc: OSError) -> str:
     return f"{path}{extra}: {exc.strerror or exc}"
 
 
+def _on_stop_signal(signum, frame):
+    """SIGINT raises KeyboardInterrupt, SIGTERM :class:`Terminated`. The first of them stops the
+    command; any later one (a second Ctrl-C, or the copy a worker forwards when the whole
+    process group got it) is ignored, so that it cannot cut short the clean-up that kills the
+    workers and removes the temporary output."""
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    if signum == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Terminated(signum)
+
+
+def _stop_on_signals() -> dict:
+    """Install :func:`_on_stop_signal` for SIGINT and SIGTERM; the handlers it replaced, to be
+    restored (none outside the main thread, where signals are left alone)."""
+    previous = {}
+    try:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            # a process started with SIGINT ignored (nohup, some test runners) keeps ignoring it
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                previous[sig] = signal.signal(sig, _on_stop_signal)
+    except ValueError:  # not the main thread
+        return {}
+    return previous
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``prs-geom argv`` (default ``sys.argv[1:]``) and return its exit code (module docstring)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     # --debug is accepted anywhere, before or after the sub-command
     debug = "--debug" in argv
@@ -964,31 +1128,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse: 0 for --help/--version, 2 for usage errors
         return int(exc.code or 0)
     args.debug = debug
-    # one progress display per command, on stderr (prs_geom.progress); none with --quiet or
+    # one progress display per command, on stderr (prs_geom.runtime.progress); none with --quiet or
     # --json. It starts with the first stage a command reports, so quick commands show nothing.
     display = None
     if not (getattr(args, "quiet", False) or getattr(args, "json", False)):
         display = ConsoleProgress(default_stage=args.command)
     args.progress = display if display is not None else silent
 
-    def on_signal(signum, frame):
-        # the first SIGINT or SIGTERM stops the command; any later one (a second Ctrl-C, or
-        # the copy a worker forwards when the whole process group got it) must not cut
-        # short the clean-up that kills the workers and removes the temporary output
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(sig, signal.SIG_IGN)
-        if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        raise Terminated(signum)
-
-    previous = {}
-    try:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            # a process started with SIGINT ignored (nohup, some test runners) keeps ignoring it
-            if signal.getsignal(sig) is not signal.SIG_IGN:
-                previous[sig] = signal.signal(sig, on_signal)
-    except ValueError:  # not the main thread: leave signals alone
-        previous = {}
+    previous = _stop_on_signals()
 
     def fail(code: int, message: str) -> int:
         if debug:
@@ -1014,7 +1161,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         print("interrupted", file=sys.stderr)
         return EXIT_SIGTERM
-    except (DesignError, UsageError, OutputRefused) as exc:
+    except DesignError as exc:
+        return fail(EXIT_INPUT, str(flag_named(exc)))
+    except (UsageError, OutputRefused) as exc:
         return fail(EXIT_INPUT, str(exc))
     except (EnvironmentFailure, ResourceLimitError) as exc:
         return fail(EXIT_ENVIRONMENT, str(exc))
@@ -1034,6 +1183,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entry_point() -> None:
+    """The console script: :func:`main` as the process exit code."""
     sys.exit(main())
 
 

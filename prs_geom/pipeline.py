@@ -34,7 +34,7 @@ from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
 from prs_geom.model.io import PRS_KINDS, design_hash, design_to_dict, dumps_toml, load_design
-from prs_geom.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
+from prs_geom.runtime.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
 if TYPE_CHECKING:  # pragma: no cover
     import trimesh
@@ -44,8 +44,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.rating import RatingResult
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
-    from prs_geom.background import Background, Job
-    from prs_geom.fe_cache import CachedInfluence
+    from prs_geom.runtime.pool import Background, Job
+    from prs_geom.analysis.fe.cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
 
 REPORT_NAME = "report.json"
@@ -97,7 +97,7 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
     if design.loads.compliance != "fe":
         return LoadModels(analytic)
     from prs_geom.analysis.fe.compliance import fe_load_model
-    from prs_geom.fe_cache import cached_influence
+    from prs_geom.analysis.fe.cache import cached_influence
 
     # the teeth's compliance is that of the constant-pitch thread: a graded design's contact
     # points move by its sub-um warps, which must not make a new cache key or new matrices
@@ -224,7 +224,7 @@ class BuildContext:
         """Start ``fn(*args, **kwargs)``, the background work of ``stage``, in a worker process
         when the build has them; else it runs in this process when taken (:meth:`take`), and
         ``progress=True`` hands it this build's progress callback (a worker reports none)."""
-        from prs_geom.background import Background
+        from prs_geom.runtime.pool import Background
 
         bg = self.background if self.background is not None else Background(0)
         if progress and not bg.workers:
@@ -649,7 +649,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     the drawings of ``manufacturing``, the plots of ``loads``, ``rating``, ``tolerance``),
     wherever they ran. With workers their sum exceeds the build's wall time.
     """
-    from prs_geom.background import Background
+    from prs_geom.runtime.pool import Background
 
     stages = STAGES if stages is None else stages
     with Background(workers) as background:
@@ -734,7 +734,7 @@ def plan_build(design: PRSDesign, memory_budget: int | None = None) -> "tuple[in
     main process's. Raises :class:`~prs_geom.mesh.budget.ResourceLimitError` when it fits
     neither way.
     """
-    from prs_geom.background import default_workers
+    from prs_geom.runtime.pool import default_workers
     from prs_geom.mesh.budget import ResourceLimitError, check_windows, guard
 
     workers = default_workers()
@@ -782,7 +782,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
             require_ocp()   # a missing extra is known now, not after the meshing
         workers, _ = plan_build(design, memory_budget)
     from prs_geom.mesh.budget import ResourceLimitError, default_budget_bytes
-    from prs_geom.memwatch import MemoryWatch
+    from prs_geom.runtime.memwatch import MemoryWatch
 
     # the budget holds while the build runs, too (prs_geom.memwatch): exit 3, nothing written
     watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,

@@ -4,7 +4,7 @@
 Sits at the pipeline layer: it builds the problems from the design (:mod:`prs_geom.analysis`),
 cuts the samples into chunks of :data:`CHUNK_SAMPLES` whatever the number of workers, gives
 every chunk its own :class:`numpy.random.SeedSequence` stream (``spawn_seeds(seed, k)``)
-and runs them through :func:`prs_geom.scaleout.run_chunks` (serial, joblib or Dask). The
+and runs them through :func:`prs_geom.runtime.scaleout.run_chunks` (serial, joblib or Dask). The
 results are gathered in chunk order, so the same seed gives the same numbers, bit for bit,
 on any backend and any number of workers.
 
@@ -33,8 +33,12 @@ from prs_geom.analysis.robust import PitchFamily, weighted_quantile
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
 from prs_geom.model.spectrum import Spectrum
-from prs_geom.progress import ProgressFn
-from prs_geom.scaleout import run_chunks, spawn_seeds
+from prs_geom.runtime.progress import ProgressFn
+from prs_geom.runtime.scaleout import run_chunks, spawn_seeds
+
+__all__ = ["CHUNK_SAMPLES", "CP_LEVEL", "TOLERANCE_STEP_UM", "SYNTHESIS_MAX_UM", "NO_ERROR_MODEL", "Execution",
+           "ToleranceStudy", "SynthesisResult", "RobustResult", "check_probability", "require_error_model",
+           "tolerance_study", "synthesise", "robust_pitch"]
 
 #: Samples per chunk: fixed, so that the draws do not depend on the worker count.
 CHUNK_SAMPLES = 250
@@ -58,6 +62,8 @@ class Execution:
     progress: ProgressFn | None = field(default=None, compare=False)
 
     def map(self, task, payloads, stage: str, sizes=None) -> list:
+        """``[task(p) for p in payloads]`` through :func:`~prs_geom.runtime.scaleout.run_chunks`
+        on this execution's backend, in payload order; progress under ``stage``."""
         return run_chunks(task, payloads, workers=self.workers, scheduler=self.scheduler,
                           dask_workers=self.dask_workers, progress=self.progress, stage=stage, sizes=sizes)
 
@@ -111,6 +117,19 @@ NO_ERROR_MODEL = ("the design has no error model: add a [tolerances] section wit
                   "errors would only repeat the loads")
 
 
+def check_probability(parameter: str, value: float) -> float:
+    """``value`` when it is a probability strictly inside (0, 1).
+
+    Raises
+    ------
+    DesignError
+        On field ``parameter`` (the name of the argument that carried it) otherwise.
+    """
+    if not 0.0 < value < 1.0:
+        raise DesignError(parameter, value, "must be in (0, 1)")
+    return value
+
+
 def require_error_model(design: PRSDesign, tolerances: Tolerances | None = None) -> Tolerances:
     """The error model of a study: ``tolerances``, else the design's ``[tolerances]``.
 
@@ -134,8 +153,8 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
     ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
     fractions (or at ``loads_n``, N), all z rollers side by side."""
     tolerances = require_error_model(design, tolerances)
-    if confidence is not None and not 0.0 < confidence < 1.0:
-        raise DesignError("--confidence", confidence, "must be in (0, 1)")
+    if confidence is not None:
+        check_probability("confidence", confidence)
     contact, model = _context(design, contact, model)
     errors = tol.error_model(design, contact, tolerances)
     F0 = design.loading.axial_load_n
@@ -151,8 +170,6 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                                   {g: r.worst.max(axis=0) for g, r in zip(groups, results[1:])}) if variants else []
     section = _study_section(design, tolerances, problem, stats, det, ranking)
     if confidence is not None:
-        if not 0.0 < confidence < 1.0:
-            raise DesignError("--confidence", confidence, "must be in (0, 1)")
         worst = stats.worst.max(axis=0)
         section["at_confidence"] = {
             "confidence": confidence,
@@ -230,6 +247,7 @@ class SynthesisResult:
     tolerances: Tolerances | None
 
     def report(self) -> dict[str, Any]:
+        """The synthesis as a JSON-ready dict (report.json's ``tolerance.synthesis``, tolerances in um)."""
         return {"target_ldc": self.target_ldc, "confidence": self.confidence,
                 "confidence_bound": f"one-sided Clopper-Pearson lower bound at {CP_LEVEL:.0%}",
                 "feasible": self.feasible, "uniform_flank_um": self.uniform_um,
@@ -245,6 +263,106 @@ def _success(problem: tol.StudyProblem, samples: int, seed: int, execution: Exec
     return int((worst <= target).sum()), worst
 
 
+def _check_synthesis_request(target_ldc: float, confidence: float, samples: int) -> None:
+    """The arguments of :func:`synthesise` that make a synthesis impossible, named by parameter."""
+    if not (math.isfinite(target_ldc) and target_ldc >= 1.0):
+        raise DesignError("target_ldc", target_ldc, "must be a number >= 1 (the mean tooth carries 1)")
+    check_probability("confidence", confidence)
+    if tol.clopper_pearson_lower(samples, samples, CP_LEVEL) < confidence:
+        # even every sample meeting the target would not prove the confidence
+        need = math.ceil(math.log(1.0 - CP_LEVEL) / math.log(confidence))
+        raise DesignError("samples", samples, f"too few to show probability {confidence:g} at "
+                                              f"{CP_LEVEL:.0%} confidence even if every sample met the "
+                                              f"target: use at least {need}")
+
+
+@dataclass(frozen=True)
+class _FlankSearch:
+    """The flank-tolerance trials of one synthesis: every trial uses the same draws
+    (``samples`` from ``seed``), the other error terms of ``base`` and ``problem``'s loads."""
+
+    design: PRSDesign
+    contact: ContactResult
+    base: Tolerances
+    problem: tol.StudyProblem
+    samples: int
+    seed: int
+    execution: Execution
+    target_ldc: float
+    confidence: float
+
+    def errors(self, per_tooth_um: dict[str, NDArray]) -> tol.ErrorModel:
+        """The error model with these per-tooth flank tolerances (um) on top of ``base``."""
+        t = replace(self.base, **{k: tuple(map(float, v)) for k, v in per_tooth_um.items()})
+        return tol.error_model(self.design, self.contact, t)
+
+    def per_tooth(self, units: int, weights: dict[str, NDArray] | None) -> dict[str, NDArray]:
+        """Flank tolerances (um) of ``units`` grid steps: uniform, or allocated by ``weights``."""
+        mean_um = units * TOLERANCE_STEP_UM
+        n = self.design.thread.engaged_teeth
+        return {k: (np.full(n, mean_um) if weights is None else _round_down(weights[k] * mean_um))
+                for k in FLANK_FIELDS}
+
+    def passes(self, units: int, weights: dict[str, NDArray] | None) -> tuple[bool, int]:
+        """(the tolerance of ``units`` steps meets the target at the confidence, successes)."""
+        problem = replace(self.problem, errors=self.errors(self.per_tooth(units, weights)))
+        # the trial tolerance in the stage name: each trial's sample count restarts, and a
+        # log should say which tolerance a count belongs to
+        label = (f"synthesis, {'uniform' if weights is None else 'allocated'} flank tolerance "
+                 f"{units * TOLERANCE_STEP_UM:.2f} µm, samples")
+        k, _ = _success(problem, self.samples, self.seed, self.execution, self.target_ldc, label)
+        return tol.clopper_pearson_lower(k, self.samples, CP_LEVEL) >= self.confidence, k
+
+    def largest(self, weights: dict[str, NDArray] | None) -> tuple[int, int, bool]:
+        """(largest passing tolerance in grid steps, -1 when exact flanks fail; the successes of
+        exact flanks when they fail, else 0; True when the search stopped at
+        :data:`SYNTHESIS_MAX_UM`): doubling from 0.5 um, then bisection."""
+        ok0, k0 = self.passes(0, weights)
+        if not ok0:
+            return -1, k0, False
+        lo, hi = 0, 50                                   # 0.5 um
+        limit = int(round(SYNTHESIS_MAX_UM / TOLERANCE_STEP_UM))
+        while True:
+            ok, _ = self.passes(hi, weights)
+            if not ok:
+                break
+            lo = hi
+            if hi >= limit:
+                return limit, self.samples, True
+            hi = min(2 * hi, limit)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if self.passes(mid, weights)[0]:
+                lo = mid
+            else:
+                hi = mid
+        return lo, 0, False
+
+    def check(self, per_tooth_um: dict[str, NDArray], verify_seed: int) -> dict[str, Any]:
+        """Successes of a chosen tolerance on the search's draws and on an independent run."""
+        problem = replace(self.problem, errors=self.errors(per_tooth_um))
+        k_s, _ = _success(problem, self.samples, self.seed, self.execution, self.target_ldc, "synthesis")
+        k_v, worst_v = _success(problem, self.samples, verify_seed, self.execution, self.target_ldc, "verification")
+        n = self.samples
+        return {
+            "successes": k_s, "fraction": k_s / n,
+            "clopper_pearson_lower": tol.clopper_pearson_lower(k_s, n, CP_LEVEL),
+            "verification": {"successes": k_v, "fraction": k_v / n,
+                             "clopper_pearson_lower": tol.clopper_pearson_lower(k_v, n, CP_LEVEL),
+                             "meets_confidence": bool(k_v / n >= self.confidence),
+                             "worst_ldc": tol.summary(worst_v)},
+        }
+
+
+def _flank_influence(search: _FlankSearch) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+    """(linearised influence of each flank on the worst coefficient at the design load, per
+    um; the allocation weights inverse to it), with a unit flank model."""
+    unit = tol.error_model(search.design, search.contact, replace(search.base, flank_um=1.0))
+    G, _ = tol.linear_influence(replace(search.problem, errors=unit), search.design.loading.axial_load_n)
+    influence = tol.flank_influence(G, unit)
+    return influence, tol.allocation_weights(influence)
+
+
 def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: Tolerances | None = None, *,
                samples: int = 1000, seed: int = 0, verify_seed: int | None = None,
                load_fractions: Sequence[float] = (1.0,), contact: ContactResult | None = None,
@@ -257,102 +375,47 @@ def synthesise(design: PRSDesign, target_ldc: float, confidence: float, base: To
     success probability is >= ``confidence``. Two forms: uniform (every flank the same T) and
     allocated (T_j = w_j T_mean with w_j from :func:`~prs_geom.analysis.tolerance.allocation_weights`,
     inverse to each flank's linearised influence). Each is re-checked by an independent run
-    from ``verify_seed`` (default seed + 1)."""
-    if not (math.isfinite(target_ldc) and target_ldc >= 1.0):
-        raise DesignError("--target-ldc", target_ldc, "must be a number >= 1 (the mean tooth carries 1)")
-    if not 0.0 < confidence < 1.0:
-        raise DesignError("--confidence", confidence, "must be in (0, 1)")
-    if tol.clopper_pearson_lower(samples, samples, CP_LEVEL) < confidence:
-        # even every sample meeting the target would not prove the confidence
-        need = math.ceil(math.log(1.0 - CP_LEVEL) / math.log(confidence))
-        raise DesignError("--samples", samples, f"too few to show probability {confidence:g} at "
-                                                f"{CP_LEVEL:.0%} confidence even if every sample met the "
-                                                f"target: use at least {need}")
+    from ``verify_seed`` (default seed + 1).
+
+    Raises
+    ------
+    DesignError
+        On the parameter ``target_ldc`` (not a number >= 1), ``confidence`` (not in (0, 1))
+        or ``samples`` (too few to show the confidence even if every sample met the target).
+    """
+    _check_synthesis_request(target_ldc, confidence, samples)
     contact, model = _context(design, contact, model)
-    n = design.thread.engaged_teeth
     base = replace(base or Tolerances(), flank_um=0.0, screw_flank_um=None, roller_screw_flank_um=None,
                    roller_nut_flank_um=None, nut_flank_um=None)
-    errors0 = tol.error_model(design, contact, base)
-    problem0 = tol.study_problem(design, model, errors0, load_fractions)
+    search = _FlankSearch(design=design, contact=contact, base=base,
+                          problem=tol.study_problem(design, model, tol.error_model(design, contact, base),
+                                                    load_fractions),
+                          samples=samples, seed=seed, execution=execution, target_ldc=target_ldc,
+                          confidence=confidence)
     verify_seed = seed + 1 if verify_seed is None else verify_seed
-
-    # linearised influence of each flank at the design load, with a unit flank model
-    unit = tol.error_model(design, contact, replace(base, flank_um=1.0))
-    G, _ = tol.linear_influence(replace(problem0, errors=unit), design.loading.axial_load_n)
-    influence = tol.flank_influence(G, unit)
-    weights = tol.allocation_weights(influence)
-
-    def model_for(per_tooth: dict[str, NDArray]) -> tol.ErrorModel:
-        t = replace(base, **{k: tuple(map(float, v)) for k, v in per_tooth.items()})
-        return tol.error_model(design, contact, t)
-
-    def passes(units: int, w: dict[str, NDArray] | None) -> tuple[bool, int]:
-        T = units * TOLERANCE_STEP_UM
-        per = {k: (np.full(n, T) if w is None else _round_down(w[k] * T)) for k in FLANK_FIELDS}
-        prob = replace(problem0, errors=model_for(per))
-        # the trial tolerance in the stage name: each trial's sample count restarts, and a
-        # log should say which tolerance a count belongs to
-        label = f"synthesis, {'uniform' if w is None else 'allocated'} flank tolerance {T:.2f} µm, samples"
-        k, _ = _success(prob, samples, seed, execution, target_ldc, label)
-        return tol.clopper_pearson_lower(k, samples, CP_LEVEL) >= confidence, k
-
-    capped: list[bool] = []
-
-    def search(w: dict[str, NDArray] | None) -> tuple[int, int]:
-        ok0, k0 = passes(0, w)
-        if not ok0:
-            return -1, k0
-        lo, hi = 0, 50                                   # 0.5 um
-        limit = int(round(SYNTHESIS_MAX_UM / TOLERANCE_STEP_UM))
-        while True:
-            ok, _ = passes(hi, w)
-            if not ok:
-                break
-            lo = hi
-            if hi >= limit:
-                capped.append(True)
-                return limit, samples
-            hi = min(2 * hi, limit)
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if passes(mid, w)[0]:
-                lo = mid
-            else:
-                hi = mid
-        return lo, 0
-
-    units_u, k_zero = search(None)
-    if units_u < 0:
+    influence, weights = _flank_influence(search)
+    units_uniform, k_zero, capped_uniform = search.largest(None)
+    if units_uniform < 0:
         checks = {"zero_flank_tolerance_successes": k_zero, "samples": samples,
                   "reason": "the target is not met even with exact flanks (the other error terms or the "
                             "pitch lists alone exceed it)"}
         return SynthesisResult(target_ldc, confidence, False, 0.0, {}, influence, checks, None)
-    units_a, _ = search(weights)
-    T_u = round(units_u * TOLERANCE_STEP_UM, 6)
-    alloc = {k: tuple(map(float, _round_down(weights[k] * units_a * TOLERANCE_STEP_UM))) for k in FLANK_FIELDS}
-
+    units_allocated, _, capped_allocated = search.largest(weights)
+    uniform_um = round(units_uniform * TOLERANCE_STEP_UM, 6)
+    allocation = {k: tuple(map(float, _round_down(weights[k] * units_allocated * TOLERANCE_STEP_UM)))
+                  for k in FLANK_FIELDS}
     checks: dict[str, Any] = {"samples": samples, "seed": seed, "verify_seed": verify_seed,
                               "load_fractions": list(load_fractions),
-                              "capped_at_um": SYNTHESIS_MAX_UM if capped else None}
-    for name, per in (("uniform", {k: np.full(n, T_u) for k in FLANK_FIELDS}),
-                      ("allocated", {k: np.array(v) for k, v in alloc.items()})):
-        prob = replace(problem0, errors=model_for(per))
-        k_s, _ = _success(prob, samples, seed, execution, target_ldc, "synthesis")
-        k_v, worst_v = _success(prob, samples, verify_seed, execution, target_ldc, "verification")
-        checks[name] = {
-            "successes": k_s, "fraction": k_s / samples,
-            "clopper_pearson_lower": tol.clopper_pearson_lower(k_s, samples, CP_LEVEL),
-            "verification": {"successes": k_v, "fraction": k_v / samples,
-                             "clopper_pearson_lower": tol.clopper_pearson_lower(k_v, samples, CP_LEVEL),
-                             "meets_confidence": bool(k_v / samples >= confidence),
-                             "worst_ldc": tol.summary(worst_v)},
-        }
+                              "capped_at_um": SYNTHESIS_MAX_UM if capped_uniform or capped_allocated else None}
+    n = design.thread.engaged_teeth
+    checks["uniform"] = search.check({k: np.full(n, uniform_um) for k in FLANK_FIELDS}, verify_seed)
+    checks["allocated"] = search.check({k: np.array(v) for k, v in allocation.items()}, verify_seed)
     source = (f"synthesised by prs-geom tolerance: target worst LDC {target_ldc:g} with probability "
               f"{confidence:g} ({CP_LEVEL:.0%} Clopper-Pearson bound), {samples} samples, seed {seed}, "
-              f"re-checked with seed {verify_seed}; uniform alternative {T_u:.2f} um")
-    written = replace(base, **alloc, flank_um=T_u, source=source, target_ldc=target_ldc, confidence=confidence,
-                      seed=seed, samples=samples, load_fractions=tuple(load_fractions))
-    return SynthesisResult(target_ldc, confidence, True, T_u, alloc, influence, checks, written)
+              f"re-checked with seed {verify_seed}; uniform alternative {uniform_um:.2f} um")
+    written = replace(base, **allocation, flank_um=uniform_um, source=source, target_ldc=target_ldc,
+                      confidence=confidence, seed=seed, samples=samples, load_fractions=tuple(load_fractions))
+    return SynthesisResult(target_ldc, confidence, True, uniform_um, allocation, influence, checks, written)
 
 
 def _round_down(values_um: NDArray) -> NDArray:
@@ -394,6 +457,7 @@ class RobustResult:
     evaluations: int
 
     def report(self) -> dict[str, Any]:
+        """The chosen family member and the comparison as a JSON-ready dict."""
         return {"a_nut_roller": self.a_nr, "a_roller_screw": self.a_rs, "evaluations": self.evaluations,
                 **self.comparison}
 
@@ -410,8 +474,7 @@ def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances |
     (1, 1) are members of the grid, so the result is never worse than either on the
     objective."""
     from scipy import optimize
-    if not 0.0 < quantile < 1.0:
-        raise DesignError("--quantile", quantile, "must be in (0, 1)")
+    check_probability("quantile", quantile)
     tolerances = tolerances or design.tolerances or Tolerances()
     contact, model = _context(design, contact, model)
     errors = tol.error_model(design, contact, tolerances)

@@ -23,35 +23,34 @@ error model), and every dimension the base design took by default
 (truncation diameters, roller arc radius, screw length) is derived again for the point's
 pitch and teeth; dimensions the base design states are kept, and may then break a rule.
 
-The points run through :func:`prs_geom.scaleout.run_chunks` in chunks of a fixed size, so the
+The points run through :func:`prs_geom.runtime.scaleout.run_chunks` in chunks of a fixed size, so the
 table is the same, bit for bit, serially, with joblib or on Dask. Sweep order: the product
 in the order starts, rollers, pitch, teeth, loads, each axis in the order given (the last
 axis varies fastest).
 
-No I/O here: :class:`SweepResult` gives the rows, the columns with their units and the CSV
-text; the caller writes files. The command line ``prs-geom sweep`` uses
-:func:`add_arguments` and :func:`run`.
+No file I/O here: :class:`SweepResult` gives the rows, the columns with their units and the
+CSV text, :func:`print_table` the fixed-width table; the caller writes files. The command
+line ``prs-geom sweep`` (:mod:`prs_geom.cli`) parses the options and calls :func:`sweep`.
 
-This module is imported when the command-line parser is built, so numpy, the analysis layer
-and the scale-out backends are imported inside the functions that need them.
+The command-line parser reads :data:`SERIAL_BELOW` from this module, so numpy, the analysis
+layer and the scale-out backends are imported inside the functions that need them.
 """
 from __future__ import annotations
 
-import argparse
 import itertools
 import math
 import numbers
 import sys
 import warnings
 from dataclasses import dataclass, replace
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, DesignWarning, PRSGeomError
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 __all__ = ["Column", "SweepPoint", "SweepResult", "sweep", "point_design", "evaluate_point",
-           "DEFAULT_FRACTIONS", "CHUNK_POINTS", "SERIAL_BELOW", "add_arguments", "print_table", "run"]
+           "DEFAULT_FRACTIONS", "CHUNK_POINTS", "SERIAL_BELOW", "STATUSES", "print_table"]
 
 #: Loads (fractions of the point's design load) at which the graded design is evaluated.
 DEFAULT_FRACTIONS: tuple[float, ...] = (0.25, 0.5, 1.0, 1.5)
@@ -336,7 +335,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
         Fractions of each point's design load at which the graded design is evaluated
         (default 25, 50, 100, 150 %).
     workers : int, optional
-        joblib worker processes (:func:`prs_geom.scaleout.run_chunks`); default one per CPU,
+        joblib worker processes (:func:`prs_geom.runtime.scaleout.run_chunks`); default one per CPU,
         but serial for fewer than :data:`SERIAL_BELOW` points. The table does not depend on
         where the points run.
     scheduler : str or distributed.Client, optional
@@ -358,7 +357,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
     EnvironmentFailure
         Dask asked for but not installed, or its scheduler cannot be reached.
     """
-    from prs_geom.scaleout import plan_chunks, run_chunks
+    from prs_geom.runtime.scaleout import plan_chunks, run_chunks
 
     s_axis = _axis("starts", starts, None)
     z_axis = _axis("rollers", rollers, design.roller.count)
@@ -386,45 +385,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
                        tuple(row for part in parts for row in part))
 
 
-# --------------------------------------------------------------------------- command line
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} must be >= 1")
-    return value
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of ``prs-geom sweep`` (the DESIGN argument is the caller's)."""
-    parser.add_argument("--starts", type=int, nargs="+", action="extend", metavar="N",
-                        help="screw and nut starts to sweep (default: the design's)")
-    parser.add_argument("--rollers", type=int, nargs="+", action="extend", metavar="Z",
-                        help="roller counts to sweep (default: the design's)")
-    parser.add_argument("--pitch", type=float, nargs="+", action="extend", metavar="MM",
-                        help="axial pitches in mm to sweep (default: the design's)")
-    parser.add_argument("--teeth", type=int, nargs="+", action="extend", metavar="N",
-                        help="engaged teeth to sweep (default: the design's)")
-    parser.add_argument("--loads", type=float, nargs="+", action="extend", metavar="FRACTION",
-                        help="design loads to sweep as fractions of the design's (default 1)")
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=_positive_int, metavar="N",
-                       help=f"joblib worker processes (default: one per CPU, but none for fewer than "
-                            f"{SERIAL_BELOW} points; 1 runs in this process)")
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="run on the Dask cluster at ADDRESS (tcp://host:port), or 'local' for a local "
-                            "Dask cluster; needs the dask extra")
-    where.add_argument("--dask-workers", type=_positive_int, metavar="N",
-                       help="run on a local Dask cluster of N processes; needs the dask extra")
-    parser.add_argument("--json", action="store_true", help="print the table as JSON (columns with units, rows)")
-    parser.add_argument("--out", metavar="FILE.csv", help="also write the table as CSV (an existing file is "
-                                                          "refused unless --force)")
-    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
-    parser.add_argument("--quiet", action="store_true", help="no progress output")
-
-
+# --------------------------------------------------------------------------- the table as text
 def _cell(value: Any, fmt: str) -> str:
     return "-" if value is None else format(value, fmt)
 
@@ -475,29 +436,3 @@ def _ranges(numbers_: list[int]) -> str:
         if k is not None:
             start = prev = k
     return ", ".join(out)
-
-
-def run(args: argparse.Namespace, design: PRSDesign, *, progress: ProgressFn | None = None,
-        write_out: Callable[[str], None] | None = None) -> int:
-    """``prs-geom sweep``: run the sweep of ``args`` on ``design``, print the table (or JSON
-    with ``--json``) and hand the CSV text to ``write_out`` when ``--out`` is given.
-
-    ``write_out(text)`` is the caller's atomic file writer (refusing an existing file was
-    the caller's job, before the sweep). Returns exit code 0: invalid points are rows of
-    the table, not a failure.
-    """
-    if args.out and write_out is None:
-        raise ValueError("--out needs a write_out function")
-    result = sweep(design, starts=args.starts, rollers=args.rollers, pitch_mm=args.pitch, teeth=args.teeth,
-                   loads=args.loads, workers=args.workers,
-                   scheduler=args.scheduler, dask_workers=args.dask_workers, progress=progress)
-    if args.json:
-        import json
-
-        print(json.dumps(result.to_json(), indent=2))
-    else:
-        print_table(result)
-    if args.out:
-        write_out(result.csv_text())
-        print(f"wrote {args.out}: {result.summary()}", file=sys.stderr)
-    return 0

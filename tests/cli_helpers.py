@@ -6,6 +6,8 @@ from contextlib import redirect_stderr, redirect_stdout
 from prs_geom import cli
 from prs_geom.model.io import toml_string
 
+__all__ = ["run", "toml_value", "to_toml"]
+
 
 def run(argv):
     """(exit code, stdout, stderr) of ``prs-geom argv``."""

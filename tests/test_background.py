@@ -1,11 +1,11 @@
-"""Issue 17: background jobs of a build (prs_geom.background)."""
+"""Background jobs of a build (prs_geom.runtime.pool)."""
 from __future__ import annotations
 
 import pickle
 
 import pytest
 
-from prs_geom.background import Background, default_workers
+from prs_geom.runtime.pool import Background, default_workers
 from prs_geom.model.errors import DesignError
 
 

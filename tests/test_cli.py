@@ -1,4 +1,4 @@
-"""CLI behaviour: exit codes, error messages, atomic output (issue 2)."""
+"""CLI behaviour: exit codes, error messages, atomic output."""
 import dataclasses
 import math
 import subprocess
@@ -23,7 +23,7 @@ def _write(data, path):
 not_a_number = st.one_of(st.text(max_size=5), st.booleans(), st.just(math.nan), st.just(math.inf),
                          st.just(-math.inf))
 non_positive = st.one_of(st.floats(max_value=0.0, allow_nan=False), not_a_number)
-#: sizes (mm) outside 0.01 to 1e4 (issue 29: a size below 10 um vanished in the rounding)
+#: sizes (mm) outside 0.01 to 1e4 (a size below 10 um vanished in the rounding)
 bad_size = st.one_of(non_positive, st.floats(1e-300, 0.0099), st.floats(1e4, 1e300, exclude_min=True))
 
 
@@ -98,7 +98,7 @@ INVALID = {
     "gears.face_width_mm": bad_size,
     # the [mechanism] section (layout rules that need the whole design are checked at build)
     "mechanism.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
-    # beyond the ISO 286 tables (500 mm) and not a DIN 472 bore (issue 29: looked up at construction)
+    # beyond the ISO 286 tables (500 mm) and not a DIN 472 bore (looked up at construction)
     "mechanism.journal_diameter_mm": st.one_of(bad_size, st.floats(500.01, 1e4)),
     "mechanism.carrier_thickness_mm": st.one_of(bad_size, st.floats(500.01, 1e4)),
     "mechanism.ring_bore_mm": st.one_of(bad_size, st.sampled_from([7.0, 59.0, 201.0, 250.0])),
@@ -238,3 +238,49 @@ def test_help_of_every_subcommand():
 def test_unknown_subcommand_is_usage_error():
     code, _, err = run(["frobnicate"])
     assert code == 2 and "invalid choice" in err
+
+
+@pytest.mark.parametrize("argv, flag, call", [
+    (["tolerance", "--target-ldc", "1.5", "--confidence", "1.5"], "--confidence",
+     lambda studies, d: studies.synthesise(d, 1.5, 1.5)),
+    (["tolerance", "--target-ldc", "0.5", "--samples", "100"], "--target-ldc",
+     lambda studies, d: studies.synthesise(d, 0.5, 0.9)),
+    (["tolerance", "--target-ldc", "1.5", "--samples", "50"], "--samples",
+     lambda studies, d: studies.synthesise(d, 1.5, 0.95, samples=50)),
+    (["design-pitch", "--robust", "--quantile", "1"], "--quantile",
+     lambda studies, d: studies.robust_pitch(d, None, quantile=1.0)),
+])
+def test_library_errors_name_the_parameter_and_the_cli_prints_the_flag(argv, flag, call):
+    """The studies' errors name their parameter (a library user has no flags); the command
+    line prints the flag that set it (cli.FLAG_OF_PARAMETER)."""
+    from prs_geom import cli, studies
+    from prs_geom.model.errors import DesignError
+
+    parameter = next(k for k, v in cli.FLAG_OF_PARAMETER.items() if v == flag)
+    with pytest.raises(DesignError) as info:
+        call(studies, default_design())
+    assert info.value.field == parameter and not str(info.value).startswith("-")
+    code, _, err = run(argv)
+    assert code == 2 and err.startswith(f"error: {flag} = "), err
+    assert err.strip().split(" = ", 1)[1] == str(info.value).split(" = ", 1)[1]   # the same rule
+
+
+def test_execution_flags_are_one_definition():
+    """Every command that runs chunked work takes the same execution flags, with the same
+    help and the same check."""
+    import argparse
+
+    from prs_geom.cli import make_parser
+
+    sub = next(a for a in make_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    flags = {}
+    for name, parser in sub.choices.items():
+        found = {s: (a.type, a.metavar) for a in parser._actions for s in a.option_strings
+                 if s in ("--workers", "--scheduler", "--dask-workers")}
+        if found:
+            flags[name] = found
+    assert set(flags) == {"design-pitch", "tolerance", "sweep"}
+    assert len({tuple(sorted(f.items())) for f in flags.values()}) == 1
+    for command in ("tolerance", "design-pitch --robust", "sweep"):
+        code, _, err = run([*command.split(), "--workers", "0"])
+        assert code == 2 and err.startswith("error: --workers = 0: must be >= 1"), (command, err)

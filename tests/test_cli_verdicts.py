@@ -1,4 +1,4 @@
-"""Issue 28: verdicts where an engineer expects them, at the command line.
+"""Verdicts where an engineer expects them, at the command line.
 
 ``rating`` prints PASS/FAIL per limit (a failed limit is a warning, with ``--strict`` exit 1),
 ``validate`` warns on implausible values and drifting rollers (exit 0), ``tolerance`` refuses

@@ -1,4 +1,4 @@
-"""The influence-matrix cache (prs_geom.fe_cache): keyed by geometry, material and code,
+"""The influence-matrix cache (prs_geom.analysis.fe.cache on prs_geom.runtime.cache): keyed by geometry, material and code,
 never stale, written atomically into its own folder only, and robust to damaged entries.
 
 A 5-tooth section at mesh level 0 keeps each computation under a second."""
@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from prs_geom import fe_cache
+from prs_geom.analysis.fe import cache as fe_cache
 from prs_geom.analysis.contact import analyse_contact
 from prs_geom.analysis.fe import part_sections
 from prs_geom.model.design import default_design
@@ -72,7 +72,7 @@ def test_key_follows_material_geometry_and_code(design, tmp_path, monkeypatch):
     # the load moves the Hertz band of every part
     heavier = design.with_changes(loading=replace(design.loading, axial_load_n=30_000.0))
     assert not any(_get(heavier, folder).hits.values())
-    monkeypatch.setattr(fe_cache, "_code_fingerprint", lambda: "another version of the FE code")
+    monkeypatch.setattr(fe_cache, "code_fingerprint", lambda: "another version of the FE code")
     r = _get(design, folder)
     assert not any(r.hits.values()) and r.keys["screw"] != base.keys["screw"]
 
@@ -105,7 +105,7 @@ def test_damaged_or_foreign_entries_are_recomputed(design, tmp_path):
 
 
 def test_a_tampered_matrix_is_detected_and_recomputed(design, tmp_path):
-    """Issue 29: an influence matrix multiplied by 1000 in the cache file (its key and
+    """An influence matrix multiplied by 1000 in the cache file (its key and
     description left as they were) fails the checksum: recomputed, replaced, warned."""
     folder = tmp_path / "cache"
     base = _get(design, folder)

@@ -1,4 +1,4 @@
-"""Issue 28: an interrupt reaches every process of a build.
+"""An interrupt reaches every process of a build.
 
 Whichever process receives SIGINT or SIGTERM (the main process only, as ``kill -INT PID``
 does, or the whole process group, as Ctrl-C in a terminal does), the build stops with exit
@@ -156,7 +156,7 @@ def _snapshot(folder: Path) -> dict[str, tuple[int, int]]:
 
 @pytest.mark.parametrize("command", ["build", "tolerance", "tolerance-dask"])
 def test_sigkill_of_the_main_process_leaves_no_worker_running_or_writing(tmp_path, command):
-    """Issue 29: SIGKILL of the main process (what the out-of-memory killer sends) mid-build
+    """SIGKILL of the main process (what the out-of-memory killer sends) mid-build
     and mid-tolerance study: every worker notices its parent is gone and exits at once
     (parent watch), so soon after no child remains and nothing is written any more."""
     design_file = tmp_path / "small.toml"
@@ -199,7 +199,7 @@ def test_sigkill_of_the_main_process_leaves_no_worker_running_or_writing(tmp_pat
 
 @pytest.mark.parametrize("where", [["--workers", "2"]])
 def test_ctrl_c_to_a_study_prints_one_line(tmp_path, where):
-    """Issue 29: a Ctrl-C (SIGINT to the process group) during a tolerance study on loky:
+    """A Ctrl-C (SIGINT to the process group) during a tolerance study on loky:
     exit 130 and the one line, no tracebacks from the workers."""
     exe = Path(sys.executable).parent / "prs-geom"
     env = {k: v for k, v in os.environ.items() if k != "PRS_GEOM_WORKERS"}

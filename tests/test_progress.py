@@ -1,4 +1,4 @@
-"""Issue 28: the console progress display (prs_geom.progress), driven by a fake clock.
+"""The console progress display (prs_geom.runtime.progress), driven by a fake clock.
 
 The real gaps and the interrupt delay of a real build are measured by
 ``benchmarks/bench_build.py``; here the display's rules are checked in fake time.
@@ -8,7 +8,7 @@ from __future__ import annotations
 import io
 import re
 
-from prs_geom.progress import ConsoleProgress, begin_stage, end_stage, silent, unwatch_job, watch_job
+from prs_geom.runtime.progress import ConsoleProgress, begin_stage, end_stage, silent, unwatch_job, watch_job
 
 LINE = re.compile(r"^\[\s*([0-9.]+) s\] (.*)$")
 

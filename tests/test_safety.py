@@ -526,7 +526,7 @@ def test_a_dangling_symlink_as_out_is_refused_and_not_followed(tmp_path, tiny_fi
 
 
 def test_a_build_over_its_budget_at_run_time_is_stopped_with_exit_3_and_no_output(tmp_path):
-    """The runtime guard (prs_geom.memwatch): a build whose real need exceeds the budget,
+    """The runtime guard (prs_geom.runtime.memwatch): a build whose real need exceeds the budget,
     here because the up-front estimate is bypassed, is stopped before it passes the budget
     by much: ResourceLimitError (exit 3 on the command line), no output, no worker left."""
     script = tmp_path / "over.py"
@@ -536,7 +536,7 @@ def test_a_build_over_its_budget_at_run_time_is_stopped_with_exit_3_and_no_outpu
         "import prs_geom as pg\n"
         "import prs_geom.pipeline as pipeline\n"
         "from prs_geom.mesh.budget import ResourceLimitError, parse_size\n"
-        "from prs_geom.memwatch import process_tree_rss\n"
+        "from prs_geom.runtime.memwatch import process_tree_rss\n"
         "pipeline.plan_build = lambda design, budget=None: (2, None)   # the estimate bypassed\n"
         "base = process_tree_rss()[0]\n"
         "budget = base + parse_size('120M')\n"

@@ -1,4 +1,4 @@
-"""prs_geom.scaleout: serial, joblib and Dask give the same results bit for bit, in payload order.
+"""prs_geom.runtime.scaleout: serial, joblib and Dask give the same results bit for bit, in payload order.
 
 One Dask LocalCluster serves the module (startup is the slow part); the ``scheduler="local"``
 path starts one more, through a recording subclass that proves it is closed afterwards.
@@ -13,9 +13,9 @@ import distributed   # the test extra installs the dask extra: a missing one fai
 import numpy as np
 import pytest
 
-from prs_geom import scaleout
+from prs_geom.runtime import scaleout
 from prs_geom.model.errors import DesignError, EnvironmentFailure
-from prs_geom.scaleout import (DASK_INSTALL, Backend, local_cluster_options, plan_chunks, resolve_backend,
+from prs_geom.runtime.scaleout import (DASK_INSTALL, Backend, local_cluster_options, plan_chunks, resolve_backend,
                                run_chunks, spawn_seeds)
 
 SEED = 20240611

@@ -1,12 +1,10 @@
 """prs_geom.sweep: design-space sweeps equal the direct calls, bit for bit on any backend."""
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
 import sys
-from contextlib import redirect_stderr, redirect_stdout
 
 import numpy as np
 import pytest
@@ -16,8 +14,8 @@ from prs_geom.analysis.loads import (axial_stiffness, build_model, design_pitch,
 from prs_geom.model.design import Loading, Nut, PRSDesign, Roller, Screw, Thread, default_design
 from prs_geom.model.errors import DesignError, EnvironmentFailure
 from prs_geom.model.plausibility import design_warnings
-from prs_geom.scaleout import DASK_INSTALL
-from prs_geom.sweep import CHUNK_POINTS, SweepPoint, add_arguments, point_design, run, sweep
+from prs_geom.runtime.scaleout import DASK_INSTALL
+from prs_geom.sweep import CHUNK_POINTS, SweepPoint, point_design, sweep
 
 AXES = {"starts": [4, 5], "rollers": [8, 10], "pitch_mm": [1.5], "teeth": [6, 10], "loads": [0.5, 1.0]}
 N_POINTS = 16
@@ -51,7 +49,7 @@ def test_sweep_order_columns_and_progress(serial):
                                                     "graded_max_ldc_100pct", "graded_max_ldc_150pct"]
     assert calls == [("sweep", k, N_POINTS) for k in (4, 8, 12, 16)]
     # the 4-start points break the standard sizing of 24/8/40 mm and their rollers drift:
-    # valid with warnings, not valid (issue 28)
+    # valid with warnings, not valid
     assert res.count("ok") == res.count("warnings") == N_POINTS // 2
     assert res.counts() == {"ok": 8, "warnings": 8, "invalid": 0, "failed": 0}
     assert res.summary() == "16 points, 8 valid, 8 valid with warnings, 0 invalid, 0 failed"
@@ -149,7 +147,7 @@ def test_tolerances_are_dropped_so_that_other_tooth_counts_stay_valid():
 
 
 def test_small_sweeps_run_in_this_process_unless_workers_are_asked_for(monkeypatch):
-    import prs_geom.scaleout as scaleout
+    import prs_geom.runtime.scaleout as scaleout
 
     seen = []
     real = scaleout.run_chunks
@@ -185,51 +183,43 @@ def test_csv_keeps_full_precision(serial):
 
 
 # --------------------------------------------------------------------------- command line
-def _args(argv):
-    parser = argparse.ArgumentParser()
-    parser.add_argument("design", nargs="?")
-    add_arguments(parser)
-    return parser.parse_args(argv)
+def _run(argv):
+    """(exit code, stdout, stderr) of ``prs-geom sweep argv`` on the default design."""
+    from cli_helpers import run as cli
+
+    return cli(["sweep", *argv])
 
 
-def _run(argv, **kw):
-    out, err = io.StringIO(), io.StringIO()
-    with redirect_stdout(out), redirect_stderr(err):
-        code = run(_args(argv), default_design(), **kw)
-    return code, out.getvalue(), err.getvalue()
-
-
-def test_run_prints_json_and_hands_the_csv_to_the_writer():
-    written = []
-    code, out, err = _run(["--rollers", "10", "12", "--teeth", "6", "--workers", "1", "--json", "--out", "s.csv"],
-                          write_out=written.append)
-    assert code == 0
+def test_run_prints_json_and_writes_the_csv(tmp_path):
+    out_csv = tmp_path / "s.csv"
+    code, out, err = _run(["--rollers", "10", "12", "--teeth", "6", "--workers", "1", "--json", "--out",
+                           str(out_csv)])
+    assert code == 0, err
     data = json.loads(out)
     assert [r["status"] for r in data["rows"]] == ["ok", "invalid"]
     assert data["counts"] == {"ok": 1, "warnings": 0, "invalid": 1, "failed": 0}
     assert data["rows"][1]["constant_max_ldc"] is None
     assert {"name": "pitch_mm", "unit": "mm", "description": "axial pitch p"} in data["columns"]
-    assert len(written) == 1 and written[0].splitlines()[0].startswith("point,screw_starts,nut_starts,rollers")
-    assert "wrote s.csv: 2 points, 1 valid, 0 valid with warnings, 1 invalid, 0 failed" in err
+    assert out_csv.read_text(encoding="utf-8").splitlines()[0].startswith("point,screw_starts,nut_starts,rollers")
+    assert f"wrote {out_csv}: 2 points, 1 valid, 0 valid with warnings, 1 invalid, 0 failed" in err
     code, out, _ = _run(["--rollers", "10", "12", "--teeth", "6", "--workers", "1"])
     assert "2 points, 1 valid" in out and "invalid: roller.count = 12" in out
 
 
 def test_run_without_the_dask_extra_names_the_install_command(monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
-    with pytest.raises(EnvironmentFailure, match=r'pip install "prs-geom\[dask\]"'):
-        _run(["--teeth", "6", "--dask-workers", "2"])
+    code, _, err = _run(["--teeth", "6", "--dask-workers", "2"])
+    assert code == 3 and 'pip install "prs-geom[dask]"' in err
     assert DASK_INSTALL == 'pip install "prs-geom[dask]"'
 
 
-def test_run_flags_are_checked_by_the_parser():
-    with pytest.raises(SystemExit):
-        with redirect_stderr(io.StringIO()):
-            _args(["--workers", "2", "--scheduler", "tcp://h:1"])
-    with pytest.raises(SystemExit):
-        with redirect_stderr(io.StringIO()):
-            _args(["--workers", "0"])
-    assert _args(["--starts", "4", "5", "--pitch", "1.5", "--loads", "0.5"]).starts == [4, 5]
+def test_run_flags_are_checked_before_the_work():
+    """The execution flags are those of every command (one definition, one check): exit 2
+    naming the flag."""
+    code, _, err = _run(["--workers", "2", "--scheduler", "tcp://h:1"])
+    assert code == 2 and err.startswith("error: --workers = 2") and "Dask" in err
+    code, _, err = _run(["--workers", "0"])
+    assert code == 2 and err.startswith("error: --workers = 0: must be >= 1")
 
 
 def test_cli_sweep_exit_codes(tmp_path, monkeypatch):
@@ -250,17 +240,17 @@ def test_cli_sweep_exit_codes(tmp_path, monkeypatch):
     assert code == 3 and DASK_INSTALL in err
 
 
-def test_valid_with_warnings_is_counted_apart_in_table_csv_and_json():
+def test_valid_with_warnings_is_counted_apart_in_table_csv_and_json(tmp_path):
     """A drifting point (4 starts on the 24/8/40 mm default: r_n = 20 != n_n r_r = 16) and an
     implausible one (a 0.05 mm pitch, probably metres) are valid with warnings; a point that
-    breaks a rule is invalid; the counts, the status column and the JSON say so (issue 28)."""
-    written = []
+    breaks a rule is invalid; the counts, the status column and the JSON say so."""
+    out_csv = tmp_path / "s.csv"
     code, out, err = _run(["--starts", "4", "5", "--rollers", "10", "12", "--teeth", "6", "--workers", "1",
-                           "--out", "s.csv"], write_out=written.append)
+                           "--out", str(out_csv)])
     assert code == 0
     assert "4 points, 1 valid, 1 valid with warnings, 2 invalid, 0 failed" in out
     assert "rollers drift axially by -0.75 mm per screw turn" in out          # 2 x 0.375 x (4 - 5)
-    rows = list(csv.DictReader(io.StringIO(written[0])))
+    rows = list(csv.DictReader(io.StringIO(out_csv.read_text(encoding="utf-8"))))
     assert [(r["screw_starts"], r["rollers"], r["status"]) for r in rows] == [
         ("4", "10", "warnings"), ("4", "12", "invalid"), ("5", "10", "ok"), ("5", "12", "invalid")]
     assert "drift" in rows[0]["plausibility_warnings"] and rows[2]["plausibility_warnings"] == ""

@@ -106,7 +106,7 @@ from numpy.typing import NDArray
 from scipy import linalg
 
 from prs_geom.model.errors import ConvergenceError, DesignError
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 __all__ = ["LoadModel", "block_compliance", "MEMORY_MB", "iteration_bound", "chunk_size", "LoadResult",
            "LoadBatch", "RollerLoadResult", "solve_loads_batch", "solve_loads", "solve_loads_rollers"]

@@ -78,7 +78,7 @@ from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, Load
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResult", "block_compliance",
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",

@@ -4,7 +4,7 @@ the importance of each error term and the tolerance synthesis (docs/theory/toler
 
 Pure math, no I/O. Sampling takes a :class:`numpy.random.SeedSequence` and draws every
 number of a chunk from it, so that a study cut into the same chunks gives the same numbers
-whatever runs the chunks (:mod:`prs_geom.scaleout`); the studies themselves are run by
+whatever runs the chunks (:mod:`prs_geom.runtime.scaleout`); the studies themselves are run by
 :mod:`prs_geom.studies`.
 
 How an error enters the load model

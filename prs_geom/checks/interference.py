@@ -32,7 +32,7 @@ from prs_geom.analysis.contact import theoretical_screw
 from prs_geom.model.design import PRSDesign
 from prs_geom.checks.fcl import bvh_model
 from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, check_windows
-from prs_geom.progress import ProgressFn, silent
+from prs_geom.runtime.progress import ProgressFn, silent
 
 __all__ = [
     "MAX_CONTACTS", "body_pairs", "check_assembly", "interference", "interference_checks", "pair_overlaps",

@@ -63,7 +63,7 @@ from prs_geom.geometry.primitives import EllipseArc, Segment
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.geometry.sections import axial_section
 from prs_geom.model.design import PRSDesign
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
 PARTS = ("screw", "roller", "nut")

@@ -34,7 +34,7 @@ from prs_geom.exports.drawing import (FRAME, NOTES, SHEET, TEXT_H, TITLE_H, _dim
 from prs_geom.exports.textsafe import dxf_text, dxf_wrap
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
 #: Mechanism drawings in sheet order: (key, file name).

@@ -23,7 +23,7 @@ from prs_geom.geometry.datum import datum_mark
 from prs_geom.mesh.thread import (ThreadMesh, cut_datum_mark, from_manifold, part_chord_tolerance, thread_mesh,
                                   to_manifold)
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
-from prs_geom.progress import ProgressFn, silent
+from prs_geom.runtime.progress import ProgressFn, silent
 
 __all__ = [
     "Assembly", "GEAR_CHORD_MM", "SIDES", "build_assembly", "build_part", "end_gears", "mechanism_parts",

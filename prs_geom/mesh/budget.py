@@ -46,7 +46,7 @@ BASE_BYTES = 320 * 2 ** 20
 #: Safety factor on the mesh work of the estimate: the peaks measured over the calibration
 #: grid of benchmarks/bench_memory.py (teeth 4-20, chord tolerance 1e-4 to 1e-2 mm, 0 and 2
 #: workers) reached up to 1.36 x the per-triangle figures above (fine tolerances, where the
-#: allocator keeps freed blocks); 1.5 keeps the runtime guard (prs_geom.memwatch) from
+#: allocator keeps freed blocks); 1.5 keeps the runtime guard (prs_geom.runtime.memwatch) from
 #: stopping a build the estimate accepted.
 WORK_MARGIN = 1.5
 #: The interference check meshes at no coarser than this (mm), so that the overlap allowed for
@@ -198,7 +198,7 @@ class Estimate:
 def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers: int = 0) -> Estimate:
     """Estimated triangles and peak memory of meshing ``design`` (exports and/or check).
 
-    ``workers``: worker processes of the build (:mod:`prs_geom.background`). With workers the
+    ``workers``: worker processes of the build (:mod:`prs_geom.runtime.pool`). With workers the
     interference check runs beside the export meshing, so their peaks add, and each worker
     carries its own interpreter and libraries (:data:`BASE_BYTES`)."""
     tol = design.mesh.chord_tolerance_mm

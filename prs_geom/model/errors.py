@@ -181,7 +181,7 @@ class DesignError(PRSGeomError, ValueError):
         return str(self.args[0]) if self.args else super().__str__()
 
     def __reduce__(self):
-        # a build's background workers send their errors back pickled (prs_geom.background)
+        # a build's background workers send their errors back pickled (prs_geom.runtime.pool)
         return _rebuild_design_error, (self.field, self.value, self.rule, self.note, self.args)
 
     def prefixed(self, section: str) -> "DesignError":

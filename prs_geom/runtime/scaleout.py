@@ -21,8 +21,8 @@ Dask is an optional extra (``pip install "prs-geom[dask]"``), imported only when
 backend is asked for; without it :class:`~prs_geom.model.errors.EnvironmentFailure` names
 the install command (exit code 3 on the command line).
 
-Leaf-ish module: it imports nothing of prs_geom but :mod:`prs_geom.progress`,
-:mod:`prs_geom.background` (the worker pool) and :mod:`prs_geom.model.errors`, so any layer
+Leaf-ish module: it imports nothing of prs_geom but :mod:`prs_geom.runtime.progress`,
+:mod:`prs_geom.runtime.pool` (the worker pool) and :mod:`prs_geom.model.errors`, so any layer
 may use it. numpy, joblib, threadpoolctl and Dask
 are imported on use, which keeps the command-line start-up light.
 """
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Sequence, TypeVar
 
 from prs_geom.model.errors import DesignError, EnvironmentFailure
-from prs_geom.progress import ProgressFn
+from prs_geom.runtime.progress import ProgressFn
 
 if TYPE_CHECKING:  # pragma: no cover
     import numpy as np
@@ -295,9 +295,9 @@ def run_chunks(task: Callable[[P], R], payloads: Sequence[P], *, workers: int | 
 
 def _run_joblib(task: Callable[[Any], Any], payloads: list[Any], n_jobs: int,
                 tick: Callable[[int], None]) -> list[Any]:
-    """The chunks in the build's worker pool (:mod:`prs_geom.background`: joblib's loky
+    """The chunks in the build's worker pool (:mod:`prs_geom.runtime.pool`: joblib's loky
     processes, which do not re-run the caller's script, killed on an error or interrupt)."""
-    from prs_geom.background import Background
+    from prs_geom.runtime.pool import Background
 
     with Background(n_jobs) as pool:
         jobs = [pool.submit(_pinned_call, task, p) for p in payloads]
@@ -349,7 +349,7 @@ def _run_dask(task: Callable[[Any], Any], payloads: list[Any], backend: Backend,
             # processes inherit the ignored signals: a Ctrl-C to the process group then reaches
             # only this process, which closes the cluster, instead of a hundred lines of
             # tracebacks from the cluster's processes (one during the start-up is lost)
-            from prs_geom.background import signals_ignored
+            from prs_geom.runtime.pool import signals_ignored
 
             with signals_ignored(True):
                 cluster = distributed.LocalCluster(**local_cluster_options(backend.workers or 1))

@@ -20,7 +20,7 @@ The display is driven by a daemon thread that calls :meth:`ConsoleProgress.tick`
 call :meth:`~ConsoleProgress.tick` themselves with a fake clock. Stages are announced with
 :meth:`~ConsoleProgress.begin` and :meth:`~ConsoleProgress.end`; work running in a worker
 process is shown through :meth:`~ConsoleProgress.watch` with a function that polls the
-worker's latest progress (:meth:`prs_geom.background.Job.poll`). Library code calls the
+worker's latest progress (:meth:`prs_geom.runtime.pool.Job.poll`). Library code calls the
 module functions :func:`begin_stage`, :func:`end_stage`, :func:`watch_job` and
 :func:`unwatch_job`, which do nothing for a plain callback.
 
@@ -90,6 +90,7 @@ class _Row:
     task: Any = None   # the rich task id in a live display
 
     def status(self) -> str:
+        """``name[ (worker)][: label done/total]``."""
         text = f"{self.name} (worker)" if self.in_worker else self.name
         if self.total:
             sub = f"{self.label} " if self.label and self.label != self.name else ""

@@ -4,10 +4,10 @@ A build's stages mostly wait on each other, but three jobs need only early resul
 interference and FCL checks (design and contact), the drawings (design and contact) and
 the plots (the load and rating results). On a machine with two or more cores they run in
 worker processes while the main process meshes and writes the rest; the main process takes
-each result at the point of the run where the stage used to be, so the report and every
-file are the same as in a serial run (the golden test checks both ways). The tolerance
+each result at the point of the run where a serial build computes it, so the report and
+every file are the same as in a serial run (the golden test checks both ways). The tolerance
 study and the design sweep run their chunks in the same kind of pool
-(:func:`prs_geom.scaleout.run_chunks`).
+(:func:`prs_geom.runtime.scaleout.run_chunks`).
 
 Processes, not threads: FCL, manifold3d and matplotlib hold the GIL. The pool is joblib's
 *loky* executor: its workers are fresh interpreters (never forked: manifold3d and BLAS start
@@ -207,6 +207,8 @@ class Job:
             return None
 
     def result(self) -> Any:
+        """The job's return value (waits for it; a job without a worker runs now, once). An
+        error raised by the job is raised here, with its type."""
         if self._future is not None:
             self._value, self._seconds = self._future.result()
             self._future = None

@@ -6,11 +6,6 @@ thread samples, every :data:`SAMPLE_S` seconds, the resident set size of this pr
 of every process below it (the worker pool, the resource trackers) from ``/proc``; when
 their sum passes the budget it
 
-What the calling process already held beyond the interpreter share of the estimate
-(:data:`prs_geom.mesh.budget.BASE_BYTES`) when the job started, a notebook's earlier work
-say, is not the job's: the limit rises by it (:attr:`MemoryWatch.carried`). In a fresh
-command-line process there is none.
-
 1. marks the watch as breached and raises :class:`ResourceLimitError` in the main thread
    (through a SIGUSR1 handler and ``_thread.interrupt_main``), so that the job unwinds
    like an interrupt: workers killed, temporary output removed, nothing written, exit 3;
@@ -19,8 +14,14 @@ command-line process there is none.
    at once; the main thread meets their death (a broken pool) when it returns, and the
    caller turns that into the same :class:`ResourceLimitError` (:attr:`MemoryWatch.breached`).
 
+What the calling process already held beyond the interpreter share of the estimate
+(:data:`prs_geom.mesh.budget.BASE_BYTES`) when the job started, a notebook's earlier work
+say, is not the job's: the limit rises by it (:attr:`MemoryWatch.carried`). In a fresh
+command-line process there is none.
+
 Linux only (``/proc``); elsewhere the watch does nothing. It imports nothing of prs_geom but
-the budget's error type and byte formatting (:mod:`prs_geom.mesh.budget`).
+the budget's error type, byte formatting and interpreter share (:mod:`prs_geom.mesh.budget`;
+the one import of the runtime above the model layer, listed in the import-linter contract).
 """
 from __future__ import annotations
 
