@@ -174,11 +174,12 @@ def _print_json(obj) -> None:
 
 
 def cmd_contact(args: argparse.Namespace) -> int:
-    from prs_geom.analysis.contact import contact_report
+    from prs_geom.analysis.contact import analyse_contact
+    from prs_geom.exports.report import contact_section
 
     design = _load(args.design)
     _warn(design)
-    rep = contact_report(design)
+    rep = contact_section(analyse_contact(design))
     if args.json:
         _print_json(rep)
         return EXIT_OK
@@ -230,7 +231,8 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_loads(args: argparse.Namespace) -> int:
-    from prs_geom.analysis.loads import loads_report
+    from prs_geom.analysis.loads import load_distribution
+    from prs_geom.exports.report import loads_section
 
     design = _load(args.design)
     _warn(design)
@@ -246,7 +248,7 @@ def cmd_loads(args: argparse.Namespace) -> int:
     progress = args.progress
 
     models = _load_models(design, progress=progress)
-    rep = loads_report(design, model=models.model, progress=progress)
+    rep = loads_section(load_distribution(design, models.model, progress), models.cache_report)
     if args.json:
         _print_json(rep)
         return EXIT_OK

@@ -26,9 +26,11 @@ import numpy as np
 from prs_geom._version import __version__
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.analysis.load_solver import LoadModel
-from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult, analyse_loads, build_model
+from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
+from prs_geom.exports.report import (contact_section, gear_failures, gears_section, inspection_section, loads_section,
+                                     model_risk_section)
 from prs_geom.geometry.frames import carrier_angles, roller_spin
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
@@ -85,6 +87,12 @@ class LoadModels:
     compare: dict[str, LoadModel] | None = None
     cache: "CachedInfluence | None" = None
 
+    @property
+    def cache_report(self) -> dict[str, Any] | None:
+        """Where the FE influence matrices came from, as report.json prints it inside
+        ``loads.compliances.details.fe`` (None for the analytic model)."""
+        return None if self.cache is None else self.cache.report()
+
 
 def load_models(design: PRSDesign, contact: ContactResult | None = None,
                 progress: ProgressFn = silent) -> LoadModels:
@@ -104,7 +112,6 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
     fe_contact = analyse_contact(design.constant_pitch()) if design.graded else contact
     cached = cached_influence(design.constant_pitch(), fe_contact, progress=progress)
     fe = fe_load_model(analytic, cached.influence)
-    fe.details["fe"]["cache"] = cached.report()
     return LoadModels(fe, {"analytic": analytic, "fe": fe}, cached)
 
 
@@ -201,6 +208,8 @@ class BuildContext:
     tolerance: "ToleranceStudy | None" = None
     meshes: MeshStage | None = None
     machining: dict[str, "MachiningSheet"] | None = None
+    #: where the FE influence matrices of the loads stage came from (None: analytic model)
+    fe_cache: dict[str, Any] | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
     #: worker processes for the checks, drawings and plots (None: all in this process)
     background: "Background | None" = None
@@ -302,7 +311,7 @@ def stage_pitch(ctx: BuildContext) -> None:
 def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
     ctx.contact = analyse_contact(ctx.design)
-    ctx.report["contact"] = ctx.contact.report()
+    ctx.report["contact"] = contact_section(ctx.contact)
     if ctx.runs("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.contact, progress=True)
     if ctx.runs("manufacturing"):
@@ -318,13 +327,9 @@ def stage_gears(ctx: BuildContext) -> None:
 
     ctx.gears = analyse_gears(ctx.design)
     if ctx.gears is not None:
-        ctx.report["gears"] = rep = ctx.gears.report()
-        if not rep["passed"]:
-            failed = [c["name"] for c in rep["checks"] if not c["passed"]]
-            ctx.report["warnings"].append(
-                "end gears: " + ", ".join(failed + ([] if rep["phasing"]["consistent"] else ["phasing"])
-                                          + (["running clearance"] if rep["running_clearance"]["overlap"] else []))
-                + " failed (report gears)")
+        ctx.report["gears"] = gears_section(ctx.gears)
+        if not ctx.gears.passed:
+            ctx.report["warnings"].append("end gears: " + ", ".join(gear_failures(ctx.gears)) + " failed (report gears)")
 
 
 def stage_loads(ctx: BuildContext) -> None:
@@ -335,7 +340,8 @@ def stage_loads(ctx: BuildContext) -> None:
     models = load_models(d, ctx.contact, ctx.progress)
     ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress, model=models.model,
                                       compare=models.compare)
-    rep = loads.report()
+    ctx.fe_cache = models.cache_report
+    rep = loads_section(loads.distribution, ctx.fe_cache)
     ctx.report["loads"] = rep
     if models.cache is not None:
         ctx.report["warnings"] += list(models.cache.warnings)
@@ -346,10 +352,8 @@ def stage_loads(ctx: BuildContext) -> None:
     if loads.model_risk is not None:
         from prs_geom.exports.plots import plot_model_risk
 
-        ctx.report["model_risk"] = loads.model_risk.report()
         ctx.add_plot("model_risk", plot_model_risk, ctx.out, d.name, loads.model_risk)
-    else:
-        ctx.report["model_risk"] = dict(MODEL_RISK_NOT_COMPUTED)
+    ctx.report["model_risk"] = model_risk_section(loads.model_risk)
     equal = loads.equal_load
     ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
     p = d.thread.pitch_mm
@@ -520,9 +524,9 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     from prs_geom.exports.dxf import write_dxf
     from prs_geom.exports.sheets import sheet_csv, write_xlsx
 
-    from prs_geom.analysis.inspection import inspection, inspection_report
+    from prs_geom.analysis.inspection import inspection
 
-    insp = inspection_report(inspection(ctx.design, ctx.contact))
+    insp = inspection_section(inspection(ctx.design, ctx.contact))
     ctx.report["inspection"] = insp
     from prs_geom.exports.sheets import inspection_csv
 
@@ -583,7 +587,7 @@ def stage_html(ctx: BuildContext) -> None:
                mesh_checks=ctx.meshes.checks if ctx.meshes else None,
                checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date(),
                mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"),
-               gears=ctx.report.get("gears"))
+               gears=ctx.report.get("gears"), fe_cache=ctx.fe_cache)
 
 
 #: Stages in run order: (report name, function).

@@ -37,9 +37,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from prs_geom.analysis.contact import ContactResult
-from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult
+from prs_geom.analysis.loads import LoadsResult
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.exports.numbers import exact, format_cell, format_quantity, key_label, unit_label
+from prs_geom.exports.report import MODEL_RISK_NOT_COMPUTED, contact_section, gears_section, loads_section
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.io import design_hash, design_to_dict
@@ -472,10 +473,10 @@ def _range(lo: Any, hi: Any, key: str) -> Raw:
     return Raw(f"{num(lo, key, with_unit=False)} to {num(hi, key, with_unit=False)}")
 
 
-def _model_risk_html(loads: LoadsResult, svgs: dict[str, str]) -> str:
+def _model_risk_html(loads: LoadsResult, svgs: dict[str, str], fe_cache: dict[str, Any] | None) -> str:
     """The model-risk part of the loads section: every set of pitch lists under every
     compliance model (table at the design load, worst over the loads, plots)."""
-    out = [f"<p class='note'>{prose(_compliance_text(loads.report()['compliances']))}</p>",
+    out = [f"<p class='note'>{prose(_compliance_text(loads_section(loads.distribution, fe_cache)['compliances']))}</p>",
            "<h3 id='model-risk'>Model risk: analytic against finite-element compliance</h3>"]
     risk = loads.model_risk
     if risk is None:
@@ -613,7 +614,7 @@ def _gears_report(design: PRSDesign) -> dict[str, Any] | None:
         analysis = analyse_gears(design)
     except ValueError:
         return None
-    return None if analysis is None else analysis.report()
+    return None if analysis is None else gears_section(analysis)
 
 
 def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
@@ -623,7 +624,8 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                tolerance: dict[str, Any] | None = None, checks: dict[str, Any] | None = None,
                inspection: dict[str, Any] | None = None, date: str = "",
                rating: dict[str, Any] | None = None, mechanism: dict[str, Any] | None = None,
-               parts_list: list[dict[str, Any]] | None = None, gears: dict[str, Any] | None = None) -> None:
+               parts_list: list[dict[str, Any]] | None = None, gears: dict[str, Any] | None = None,
+               fe_cache: dict[str, Any] | None = None) -> None:
     """Write ``report.html`` from the stage results of a build.
 
     ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
@@ -639,7 +641,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
     parts = page_head(f"Planetary roller screw '{html.escape(design.name)}'", version, date, design_hash(design),
                       "Units mm, N, MPa; tooth 1 at the loaded end.", warnings, "cut the nut open")
     if contact is not None:
-        c = contact.report()
+        c = contact_section(contact)
         sr = c["screw_roller"]
         rows = []
         for label, key, src in (("screw-roller upper, nominal", "upper_at_nominal", sr),
@@ -662,7 +664,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
              Q(sr["interference_at_nominal_mm"], k + "interference_at_nominal_mm")]]))
         parts.append(f"<p class='note'>{prose(c['conventions'])}</p>")
     if loads is not None:
-        L = loads.report()
+        L = loads_section(loads.distribution, fe_cache)
         parts.append("<h2 id='loads'>Load distribution</h2>")
         parts.append(table([["design load (N)", Q(L["design_load_N"], "loads.design_load_N")],
                             ["installation", L["installation"]],
@@ -672,7 +674,7 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
                              Q(L["axial_stiffness_N_per_um"], "loads.axial_stiffness_N_per_um")]]))
         shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
         parts.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")
-        parts.append(_model_risk_html(loads, plots_svg or {}))
+        parts.append(_model_risk_html(loads, plots_svg or {}, fe_cache))
     if rating is not None:
         parts.append(_rating_html(rating, plots_svg or {}))
     if tolerance is not None:

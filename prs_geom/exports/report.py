@@ -1,0 +1,242 @@
+"""The report serialiser: report.json's sections from the typed results of the analysis.
+
+The one place where the report's layout and its prose live: each ``*_section`` function
+turns one result object into the dict report.json prints under that section's key, with
+the keys in the order the schema (``prs_geom/exports/schemas/report.schema.json``) lists
+them. The analysis classes compute; they do not know the report.
+"""
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Mapping
+
+import numpy as np
+
+from prs_geom.analysis.contact import ContactResult
+from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
+from prs_geom.analysis.loads import LoadDistribution, ModelRisk, ModelRiskCase, compliance_model
+
+if TYPE_CHECKING:  # pragma: no cover
+    from prs_geom.analysis.gears import GearAnalysis
+    from prs_geom.analysis.inspection import PartInspection
+    from prs_geom.geometry.gears import SpurGear
+
+__all__ = ["ANGLE_CONVENTIONS", "MODEL_RISK_NOT_COMPUTED", "contact_section", "gears_section",
+           "load_details_dict", "loads_section", "model_risk_section", "inspection_section",
+           "gear_failures"]
+
+
+# --------------------------------------------------------------------------- contact
+#: What the angles, flanks and frames of the ``contact`` section mean.
+ANGLE_CONVENTIONS = (
+    "part_angle_deg: angle of the contact on the screw or nut from the line of centres "
+    "(screw axis -> roller axis), positive counter-clockwise seen from +z; "
+    "roller_angle_deg: angle in the roller frame from the direction pointing away from the "
+    "screw axis (screw-side contacts near +-180, nut-side near 0); left-hand designs are "
+    "mirror images (angles change sign). upper = roller upper flank (facing +z) against the "
+    "lower flank of the screw/nut tooth above it; lower = the mirror contact. Points and "
+    "normals in the screw frame (mm); normals point to +z."
+)
+
+
+def contact_section(contact: ContactResult) -> dict[str, Any]:
+    """The ``contact`` section: the contact points, the theoretical screw pitch diameter and
+    (graded designs) the per-tooth gaps."""
+    theo, d = contact.theoretical, contact.design
+    return {
+        "conventions": ANGLE_CONVENTIONS,
+        "screw_roller": {
+            **{k: v.as_dict() for k, v in contact.screw_roller.items()},
+            "nominal_pitch_diameter_mm": theo.nominal_pitch_diameter_mm,
+            "theoretical_pitch_diameter_mm": theo.theoretical_pitch_diameter_mm,
+            "diameter_correction_mm": theo.nominal_pitch_diameter_mm - theo.theoretical_pitch_diameter_mm,
+            "interference_at_nominal_mm": max(0.0, -theo.gap_at_nominal_mm),
+            "interference_at_nominal_normal_mm": contact.interference_at_nominal_normal_mm,
+            "clearance_mm": d.contact.clearance_mm,
+            "gap_at_theoretical_mm": theo.gap_at_theoretical_mm,
+            "diameter_iterations": theo.iterations,
+        },
+        "roller_nut": {k: v.as_dict() for k, v in contact.roller_nut.items()},
+        "tooth_gaps": contact.tooth_gaps,
+    }
+
+
+# --------------------------------------------------------------------------- gears
+#: How the roller gears are phased (``gears.phasing.rule``).
+GEAR_PHASING_RULE = ("one roller gear offset meshes every roller when z divides z_ring - n_s z_g; "
+                     "ring gear tooth 0 on the nut's +x axis at both ends")
+#: What the running clearance measures (``gears.running_clearance.what``).
+GEAR_RUNNING_CLEARANCE = ("least 2D distance of every roller gear to the ring gear over one "
+                          "ring pitch of carrier travel")
+
+
+def _gear(g: "SpurGear", internal: bool) -> dict[str, Any]:
+    """One gear's data and shop measurements (span over k teeth, size over or between pins)."""
+    k = g.recommended_span_teeth()
+    pin = g.ideal_pin_diameter()
+    return {"teeth": g.teeth, "module_mm": g.module_mm, "pressure_angle_deg": g.pressure_angle_deg,
+            "profile_shift": g.profile_shift, "addendum_coefficient": g.addendum_coefficient,
+            "dedendum_coefficient": g.dedendum_coefficient,
+            "pitch_diameter_mm": 2.0 * g.pitch_radius_mm, "base_diameter_mm": 2.0 * g.base_radius_mm,
+            "tip_diameter_mm": 2.0 * g.tip_radius_mm, "root_diameter_mm": 2.0 * g.root_radius_mm,
+            "tooth_thickness_mm": g.tooth_thickness_mm, "backlash_thinning_mm": g.backlash_mm,
+            "span_teeth": k, "span_measurement_mm": g.span_measurement(k),
+            "pin_diameter_mm": pin,
+            ("between_pins_mm" if internal else "over_pins_mm"): g.over_pins(pin)}
+
+
+def gears_section(gears: "GearAnalysis") -> dict[str, Any]:
+    """The ``gears`` section: both gears, the pair, every check, the phasing and the running
+    clearance of the synchronising gears."""
+    from prs_geom.analysis.gears import SWEEP_CHORD_MM
+
+    c = gears.checks
+    return {
+        "rule": gears.pair.rule,
+        "roller_gear": _gear(gears.roller_gear, False),
+        "ring_gear": _gear(gears.ring_gear, True),
+        "face_width_mm": gears.face_width_mm,
+        "centre_distance_mm": gears.pair.centre_distance_mm,
+        "ratio": gears.pair.ratio,
+        "working_pressure_angle_deg": c.working_pressure_angle_deg,
+        "contact_ratio": c.contact_ratio,
+        "backlash_circumferential_mm": c.backlash_circumferential_mm,
+        "backlash_normal_mm": c.backlash_normal_mm,
+        "checks": [{"name": i.name, "passed": i.passed, "value": i.value, "limit": i.limit, "unit": i.unit,
+                    "rule": i.rule} for i in c.items],
+        "phasing": {"consistent": gears.phasing.consistent, "divisible": gears.divisible,
+                    "roller_gear_offset_deg": math.degrees(gears.phasing.offset_rad),
+                    "max_residual_deg": float(np.degrees(np.abs(gears.phasing.residuals_rad).max(initial=0.0))),
+                    "rule": GEAR_PHASING_RULE},
+        "running_clearance": {"min_mm": gears.sweep.min_clearance_mm, "overlap": gears.sweep.any_overlap,
+                              "steps": int(len(gears.sweep.advance_rad)),
+                              "chord_tolerance_mm": SWEEP_CHORD_MM,
+                              "what": GEAR_RUNNING_CLEARANCE},
+        "passed": gears.passed,
+    }
+
+
+def gear_failures(gears: "GearAnalysis") -> list[str]:
+    """The names of the failed gear checks, then ``phasing`` and ``running clearance`` when
+    those fail: what the build's warning lists."""
+    failed = [i.name for i in gears.checks.items if not i.passed]
+    return (failed + ([] if gears.phasing.consistent else ["phasing"])
+            + (["running clearance"] if gears.sweep.any_overlap else []))
+
+
+# --------------------------------------------------------------------------- loads
+def _hertz(h: HertzContact) -> dict[str, float]:
+    return {"sum_rho_per_mm": h.sum_rho_per_mm, "F_rho": h.F_rho, "ellipticity_k": h.ellipticity_k,
+            "semi_major_per_cbrt_N_mm": h.semi_major_per_cbrt_N_mm,
+            "semi_minor_per_cbrt_N_mm": h.semi_minor_per_cbrt_N_mm,
+            "circumferential_semi_axis_per_cbrt_N_mm": h.circumferential_semi_axis_per_cbrt_N_mm,
+            "normal_axial_component": h.normal_axial_component, "C_normal": h.C_normal}
+
+
+def _tooth(t: ToothTerms) -> dict[str, float]:
+    return {"a_mm": t.a_mm, "b_mm": t.b_mm, "c_mm": t.c_mm, "width_mm": t.width_mm, "bending": t.bending,
+            "shear": t.shear, "root_tilt": t.root_tilt, "root_shear": t.root_shear, "radial": t.radial}
+
+
+def _fe_summary(fe: FeSummary, cache: Mapping[str, Any] | None) -> dict[str, Any]:
+    out = {"model": "fe", "mesh_level": fe.mesh_level, "teeth": fe.teeth, "n_dofs": fe.n_dofs,
+           "parts": {name: {"n_dofs": p.n_dofs, "asymmetry": p.asymmetry, "seconds": p.seconds,
+                            "body_per_pitch_ratio_to_1d": p.body_per_pitch_ratio_to_1d}
+                     for name, p in fe.parts.items()},
+           "pair_compliance_middle_tooth_mm_per_N": dict(fe.pair_compliance_middle_tooth_mm_per_N),
+           "pair_compliance_uniform_mm_per_N": dict(fe.pair_compliance_uniform_mm_per_N),
+           "yamamoto_mm_per_N": dict(fe.yamamoto_mm_per_N),
+           "eigenvalues_mm_per_N": list(fe.eigenvalues_mm_per_N)}
+    if cache is not None:
+        out["cache"] = dict(cache)
+    return out
+
+
+def load_details_dict(details: LoadModelDetails | None, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """``loads.compliances.details``: what the load model was made from. ``cache``: where the
+    FE influence matrices came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`), shown
+    inside the FE summary."""
+    if details is None:
+        return {}
+    out: dict[str, Any] = {
+        "tooth_width": details.tooth_width, "hertz_rs": _hertz(details.hertz_rs),
+        "hertz_nr": _hertz(details.hertz_nr), "tooth_screw": _tooth(details.tooth_screw),
+        "tooth_roller_screw_side": _tooth(details.tooth_roller_screw_side),
+        "tooth_roller_nut_side": _tooth(details.tooth_roller_nut_side), "tooth_nut": _tooth(details.tooth_nut),
+        "section_areas_mm2": {"screw": details.section_areas_mm2.screw, "roller": details.section_areas_mm2.roller,
+                              "nut": details.section_areas_mm2.nut}}
+    if details.compliance is not None:
+        out["compliance"] = details.compliance
+    if details.fe is not None:
+        out["fe"] = _fe_summary(details.fe, cache)
+    return out
+
+
+def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The ``loads`` section: coefficients and tooth loads at the design load, constant
+    pitch, the linear model, stiffness, off-design, sensitivity and the compliances.
+    ``cache``: as for :func:`load_details_dict`."""
+    r, rc, lin, model = dist.result, dist.constant_pitch, dist.linear, dist.model
+    return {
+        "design_load_N": dist.design_load_n,
+        "installation": dist.installation,
+        "ldc_nut_roller": r.ldc_nr.tolist(),
+        "ldc_roller_screw": r.ldc_rs.tolist(),
+        "max_ldc": dist.max_ldc,
+        "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
+        "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
+        "axial_stiffness_N_per_um": dist.stiffness["secant_N_per_um"],
+        "axial_stiffness": dist.stiffness,
+        "constant_pitch": {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
+                           "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))},
+        "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),
+                         "linearised_at_N": r.mean},
+        "off_design": dist.off_design,
+        "sensitivity": dist.sensitivity,
+        "compliances": {"model": compliance_model(model), "hertz_nr_mm_per_N2/3": model.hertz_nr,
+                        "hertz_rs_mm_per_N2/3": model.hertz_rs,
+                        "tooth_nr_mm_per_N": model.tooth_nr, "tooth_rs_mm_per_N": model.tooth_rs,
+                        "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
+                        "body_nut_mm_per_N": model.body_nut, "details": load_details_dict(model.details, cache)},
+        "solver_iterations": r.iterations,
+    }
+
+
+#: The ``model_risk`` section of a build that did not compute it.
+MODEL_RISK_NOT_COMPUTED = {
+    "computed": False,
+    "note": "not computed: the model risk compares the analytic and the finite-element compliance; build with "
+            "--compliance fe (or loads.compliance = \"fe\"; needs pip install \"prs-geom[fe]\")"}
+
+
+def _model_risk_case(c: ModelRiskCase) -> dict[str, Any]:
+    return {"pitch_lists": c.pitch_lists, "designed_with": c.designed_with,
+            "evaluated_with": c.evaluated_with, "load_fraction": c.load_fraction, "load_N": c.load_n,
+            "ldc_nut_roller": c.ldc_nut_roller.tolist(), "ldc_roller_screw": c.ldc_roller_screw.tolist(),
+            "max_ldc_nut_roller": float(c.ldc_nut_roller.max()),
+            "max_ldc_roller_screw": float(c.ldc_roller_screw.max()),
+            "min_ldc_nut_roller": float(c.ldc_nut_roller.min()),
+            "min_ldc_roller_screw": float(c.ldc_roller_screw.min()),
+            "max_ldc": float(max(c.ldc_nut_roller.max(), c.ldc_roller_screw.max())),
+            "teeth_out_of_contact": c.teeth_out_of_contact}
+
+
+def model_risk_section(risk: ModelRisk | None) -> dict[str, Any]:
+    """The ``model_risk`` section: every set of pitch lists under every compliance model, or
+    :data:`MODEL_RISK_NOT_COMPUTED` (a copy) when ``risk`` is None."""
+    if risk is None:
+        return dict(MODEL_RISK_NOT_COMPUTED)
+    return {"computed": True, "models": list(risk.models), "design_load_N": risk.design_load_n,
+            "load_fractions": list(risk.load_fractions),
+            "largest_model_difference": risk.largest_model_difference,
+            "cases": [_model_risk_case(c) for c in risk.cases]}
+
+
+# --------------------------------------------------------------------------- inspection
+def inspection_section(parts: Mapping[str, "PartInspection"]) -> dict[str, dict[str, Any]]:
+    """The ``inspection`` section: every value of each part's inspection (units in the key
+    names), the reference temperature and whether the numerical check passed."""
+    from dataclasses import fields
+
+    return {part: {**{f.name: getattr(r, f.name) for f in fields(r)}, "reference_temperature_degc": 20.0,
+                   "check_passed": r.check_passed} for part, r in parts.items()}
