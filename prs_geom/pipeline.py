@@ -1,7 +1,7 @@
 """The build pipeline and the Python API: design -> analysis -> meshes -> checks -> exports.
 
 Each stage computes its result once and keeps it on the :class:`BuildContext`
-(``ctx.contact``, ``ctx.loads``, ``ctx.meshes``, ...); later stages and the exporters take
+(``ctx.results.contact``, ``ctx.results.loads``, ``ctx.results.meshes``, ...); later stages and the exporters take
 those objects, never the report dict or another stage's files. The report dict only
 collects what is written to ``report.json``.
 
@@ -29,7 +29,8 @@ from prs_geom.analysis.load_solver import LoadModel
 from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
-from prs_geom.exports.report import (contact_section, gear_failures, gears_section, inspection_section, loads_section,
+from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, check_warnings, contact_section,
+                                     gear_failures, gears_section, inspection_section, loads_section,
                                      model_risk_section)
 from prs_geom.geometry.frames import carrier_angles, roller_spin
 from prs_geom.harmonic.model import HarmonicDesign
@@ -148,14 +149,6 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
 
 # --------------------------------------------------------------------------- context
 @dataclass(frozen=True)
-class MeshStage:
-    """The meshes stage: the assembly at the design's chord tolerance and its checks."""
-
-    assembly: "Assembly"
-    checks: list[dict[str, Any]]
-
-
-@dataclass(frozen=True)
 class BuildOptions:
     """What a build writes beyond the default set (``prs-geom build`` flags).
 
@@ -194,22 +187,16 @@ def _job_label(stage: str) -> str:
 @dataclass
 class BuildContext:
     """What stages share: the design, the temporary output folder, the report being
-    collected and each stage's result (filled in stage order, each computed once)."""
+    collected (written, never read back by a stage) and each stage's typed result
+    (``results``, filled in stage order, each computed once)."""
 
     design: Any
     out: Path
     report: dict[str, Any]
     progress: ProgressFn = silent
     options: BuildOptions = field(default_factory=BuildOptions)
-    contact: ContactResult | None = None
-    gears: "GearAnalysis | None" = None
-    loads: LoadsResult | None = None
-    rating: "RatingResult | None" = None
-    tolerance: "ToleranceStudy | None" = None
-    meshes: MeshStage | None = None
-    machining: dict[str, "MachiningSheet"] | None = None
-    #: where the FE influence matrices of the loads stage came from (None: analytic model)
-    fe_cache: dict[str, Any] | None = None
+    #: each stage's result; its ``warnings`` is the list report.json prints
+    results: BuildResults | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
     #: worker processes for the checks, drawings and plots (None: all in this process)
     background: "Background | None" = None
@@ -224,6 +211,10 @@ class BuildContext:
     waited: dict[str, float] = field(default_factory=dict)
     #: the stage running now
     current_stage: str = ""
+
+    def __post_init__(self) -> None:
+        if self.results is None:
+            self.results = BuildResults(self.design, warnings=self.report["warnings"])
 
     def runs(self, stage: str) -> bool:
         """Whether ``stage`` is one of this run's stages."""
@@ -310,14 +301,14 @@ def stage_pitch(ctx: BuildContext) -> None:
 
 def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
-    ctx.contact = analyse_contact(ctx.design)
-    ctx.report["contact"] = contact_section(ctx.contact)
+    ctx.results.contact = analyse_contact(ctx.design)
+    ctx.report["contact"] = contact_section(ctx.results.contact)
     if ctx.runs("checks"):
-        ctx.submit("checks", checks_job, ctx.design, ctx.contact, progress=True)
+        ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
     if ctx.runs("manufacturing"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
-        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__,
+        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(), __version__,
                    progress=True)
 
 
@@ -325,11 +316,11 @@ def stage_gears(ctx: BuildContext) -> None:
     """The synchronising end gears: sizing, checks, phasing, running clearance (``gears``)."""
     from prs_geom.analysis.gears import analyse_gears
 
-    ctx.gears = analyse_gears(ctx.design)
-    if ctx.gears is not None:
-        ctx.report["gears"] = gears_section(ctx.gears)
-        if not ctx.gears.passed:
-            ctx.report["warnings"].append("end gears: " + ", ".join(gear_failures(ctx.gears)) + " failed (report gears)")
+    ctx.results.gears = analyse_gears(ctx.design)
+    if ctx.results.gears is not None:
+        ctx.report["gears"] = gears_section(ctx.results.gears)
+        if not ctx.results.gears.passed:
+            ctx.results.warnings.append("end gears: " + ", ".join(gear_failures(ctx.results.gears)) + " failed (report gears)")
 
 
 def stage_loads(ctx: BuildContext) -> None:
@@ -337,16 +328,16 @@ def stage_loads(ctx: BuildContext) -> None:
     from prs_geom.exports.plots import plot_loads
 
     d = ctx.design
-    models = load_models(d, ctx.contact, ctx.progress)
-    ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress, model=models.model,
+    models = load_models(d, ctx.results.contact, ctx.progress)
+    ctx.results.loads = loads = analyse_loads(d, ctx.results.contact, progress=ctx.progress, model=models.model,
                                       compare=models.compare)
-    ctx.fe_cache = models.cache_report
-    rep = loads_section(loads.distribution, ctx.fe_cache)
+    ctx.results.fe_cache = models.cache_report
+    rep = loads_section(loads.distribution, ctx.results.fe_cache)
     ctx.report["loads"] = rep
     if models.cache is not None:
-        ctx.report["warnings"] += list(models.cache.warnings)
+        ctx.results.warnings += list(models.cache.warnings)
     if models.cache is not None and not models.cache.stored:
-        ctx.report["warnings"].append(f"the finite-element influence matrices could not be stored in "
+        ctx.results.warnings.append(f"the finite-element influence matrices could not be stored in "
                                       f"{models.cache.folder} (they were computed and used; set "
                                       f"$PRS_GEOM_CACHE to a writable folder to keep them)")
     if loads.model_risk is not None:
@@ -375,17 +366,17 @@ def stage_rating(ctx: BuildContext) -> None:
     from prs_geom.analysis.rating import analyse_rating
     from prs_geom.exports.plots import plot_rating
 
-    d, loads = ctx.design, ctx.loads
+    d, loads = ctx.design, ctx.results.loads
     equal = (loads.equal_load.roller_mm, loads.equal_load.nut_mm)
-    ctx.rating = r = analyse_rating(d, ctx.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
-    ctx.report["rating"] = sec = r.report()
+    ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
+    ctx.report["rating"] = sec = r.section
     lim = sec["limits"]
     if not lim["speed_ok"]:
-        ctx.report["warnings"].append(
+        ctx.results.warnings.append(
             f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
             f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
     if not lim["buckling_ok"]:
-        ctx.report["warnings"].append(
+        ctx.results.warnings.append(
             f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
             f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
     ctx.add_plot("rating", plot_rating, ctx.out, d.name, r.curves)
@@ -404,7 +395,7 @@ def stage_tolerance(ctx: BuildContext) -> None:
     # would be resized under the build's running jobs) and its memory plan (plan_build); the
     # numbers are the same on any number of workers (prs_geom.scaleout)
     workers = ctx.background.workers if ctx.background is not None else 0
-    ctx.tolerance = study = tolerance_study(d, contact=ctx.contact, model=ctx.loads.model,
+    ctx.results.tolerance = study = tolerance_study(d, contact=ctx.results.contact, model=ctx.results.loads.model,
                                             execution=Execution(workers=max(workers, 1), progress=ctx.progress))
     ctx.report["tolerance"] = study.section
     per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
@@ -437,13 +428,13 @@ def stage_meshes(ctx: BuildContext) -> None:
 
     d = ctx.design
     # the screw of every export is the theoretical one (the state the analysis certifies)
-    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
+    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.results.contact.screw_profile)
     if ctx.runs("checks"):
         ctx.submit("meshes", mesh_checks_job, d, asm.parts, progress=True)
-        ctx.meshes = MeshStage(asm, [])
+        ctx.results.meshes = MeshStage(asm, [])
     else:
         rows = mesh_checks_job(d, asm.parts, ctx.progress)
-        ctx.meshes = MeshStage(asm, rows)
+        ctx.results.meshes = MeshStage(asm, rows)
         ctx.report["checks"]["meshes"] = rows
     ctx.report["assembly"] = {
         "parts": list(asm.placed),
@@ -467,7 +458,7 @@ def stage_meshes(ctx: BuildContext) -> None:
                 section["files"].append(one["file"])
 
         for part in ("screw", "roller", "nut"):
-            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.contact.screw_profile))
+            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.results.contact.screw_profile))
         # the carrier and the ring (when the design has them) as exact B-reps, a file each
         for part in MECHANISM_STEP_PARTS:
             if f"{part}_lo" in asm.placed:
@@ -477,13 +468,13 @@ def stage_meshes(ctx: BuildContext) -> None:
         ctx.report["files"] += section["files"]
         for part, row in section["parts"].items():
             if not row["valid"]:
-                ctx.report["warnings"].append(f"STEP: the {part} could not be made a valid solid; "
+                ctx.results.warnings.append(f"STEP: the {part} could not be made a valid solid; "
                                               f"{part}.step was not written: {row['reason']}")
 
 
-def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> dict[str, Any]:
+def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> ChecksResult:
     """FCL verification of the contacts and the interference check (both screws), with the
-    theoretical screw of the contact stage: ``{"fcl": ..., "interference": ...}``. Needs
+    theoretical screw of the contact stage. Needs
     only the design and the contact result, so a build starts it in a worker right after
     the contact stage."""
     from prs_geom.checks.fcl import verify_contacts
@@ -492,7 +483,7 @@ def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn =
     screw = contact.screw_profile
     fcl_section = verify_contacts(design, screw_profile=screw, designed_gaps=contact.tooth_gaps)
     progress("fcl verification", 1, 1)
-    return {"fcl": fcl_section, "interference": interference_checks(design, screw, progress=progress)}
+    return ChecksResult(fcl=fcl_section, interference=interference_checks(design, screw, progress=progress))
 
 
 def stage_checks(ctx: BuildContext) -> None:
@@ -500,10 +491,11 @@ def stage_checks(ctx: BuildContext) -> None:
     :func:`checks_job` started after the contact stage."""
     if "meshes" in ctx.jobs:
         rows = ctx.take("meshes")
-        ctx.meshes = MeshStage(ctx.meshes.assembly, rows)
+        ctx.results.meshes = MeshStage(ctx.results.meshes.assembly, rows)
         ctx.report["checks"]["meshes"] = rows
-    ctx.report["checks"].update(ctx.take("checks"))
-    ctx.report["warnings"] += check_warnings(ctx.report)
+    ctx.results.checks = checks = ctx.take("checks")
+    ctx.report["checks"].update({"fcl": checks.fcl, "interference": checks.interference})
+    ctx.results.warnings += check_warnings(ctx.results.meshes.checks if ctx.results.meshes else None, checks)
 
 
 def _build_date() -> str:
@@ -526,18 +518,18 @@ def stage_manufacturing(ctx: BuildContext) -> None:
 
     from prs_geom.analysis.inspection import inspection
 
-    insp = inspection_section(inspection(ctx.design, ctx.contact))
-    ctx.report["inspection"] = insp
+    ctx.results.inspection = inspection(ctx.design, ctx.results.contact)
+    ctx.report["inspection"] = insp = inspection_section(ctx.results.inspection)
     from prs_geom.exports.sheets import inspection_csv
 
     ctx.write_text("inspection.csv", inspection_csv(insp))
-    ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact, insp)
+    ctx.results.machining = sheets = machining_sheets(ctx.design, ctx.results.contact, insp)
     ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
     write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, _build_date())
     extra = {"theoretical screw pitch dia. (grind to)":
-             f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
+             f"{ctx.results.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
     ctx.report["files"] += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
@@ -551,15 +543,15 @@ def stage_mechanism(ctx: BuildContext) -> None:
     from prs_geom.geometry.mechanism import layout
 
     d = ctx.design
-    asm = ctx.meshes.assembly
+    asm = ctx.results.meshes.assembly
     lay = layout(d)
     if lay is not None:
         from prs_geom.checks.mechanism import mechanism_section
 
-        ctx.report["mechanism"] = sec = mechanism_section(asm, lay, lay.ring.designation)
+        ctx.results.mechanism = ctx.report["mechanism"] = sec = mechanism_section(asm, lay, lay.ring.designation)
         if not sec["passed"]:
             failed = [c["name"] for c in sec["checks"] if not c["passed"]]
-            ctx.report["warnings"].append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
+            ctx.results.warnings.append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 
     try:
@@ -567,8 +559,9 @@ def stage_mechanism(ctx: BuildContext) -> None:
     except ValueError:
         pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
     else:
-        ctx.report["kinematics"] = kinematics(d, ctx.contact).as_dict()
+        ctx.report["kinematics"] = kinematics(d, ctx.results.contact).as_dict()
     rows = parts_list(d, asm)
+    ctx.results.parts_list = rows
     ctx.report["parts_list"] = [r.as_dict() for r in rows]
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())
@@ -580,14 +573,7 @@ def stage_html(ctx: BuildContext) -> None:
 
     ctx.collect_plots()
 
-    write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
-               contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
-               rating=ctx.report.get("rating"),
-               tolerance=ctx.report.get("tolerance"),
-               mesh_checks=ctx.meshes.checks if ctx.meshes else None,
-               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date(),
-               mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"),
-               gears=ctx.report.get("gears"), fe_cache=ctx.fe_cache)
+    write_html(ctx.add_file("report.html"), ctx.results, ctx.plots_svg, _build_date(), __version__)
 
 
 #: Stages in run order: (report name, function).
@@ -626,18 +612,6 @@ def new_report(design) -> dict[str, Any]:
         "timings_s": {},
         "files": [],
     }
-
-
-def check_warnings(report: dict[str, Any]) -> list[str]:
-    """Every check whose measured difference exceeds its documented tolerance, as one line
-    each: the ``warnings`` lists of the mesh checks and of the FCL verification."""
-    out = []
-    checks = report.get("checks") or {}
-    for row in checks.get("meshes") or []:
-        out += [f"mesh check ({row['part']}): {w}" for w in row.get("warnings", [])]
-    fcl_check = checks.get("fcl") or {}
-    out += [f"FCL check: {w}" for w in fcl_check.get("warnings", [])]
-    return out
 
 
 def run_stages(design, out: Path, progress: ProgressFn = silent,
@@ -704,7 +678,7 @@ def harmonic_stage(ctx: BuildContext) -> None:
                      "warnings": [f"measured deviation {dev:.3g} mm exceeds the chord tolerance {tol:g} mm"]
                      if dev > tol else []})
     ctx.report["checks"]["meshes"] = rows
-    ctx.report["warnings"] += check_warnings(ctx.report)
+    ctx.results.warnings += check_warnings(rows)
     from prs_geom.harmonic.exports import harmonic_outputs
 
     # the placed assembly (wave generator, deformed flexspline), GLB, 3MF and report.html

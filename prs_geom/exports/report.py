@@ -8,22 +8,27 @@ them. The analysis classes compute; they do not know the report.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
-from prs_geom.analysis.loads import LoadDistribution, ModelRisk, ModelRiskCase, compliance_model
+from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, compliance_model
 
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.gears import GearAnalysis
     from prs_geom.analysis.inspection import PartInspection
+    from prs_geom.analysis.machining import MachiningSheet
+    from prs_geom.analysis.rating import RatingResult
+    from prs_geom.exports.bom import PartsListRow
     from prs_geom.geometry.gears import SpurGear
+    from prs_geom.mesh.assembly import Assembly
 
 __all__ = ["ANGLE_CONVENTIONS", "MODEL_RISK_NOT_COMPUTED", "contact_section", "gears_section",
            "load_details_dict", "loads_section", "model_risk_section", "inspection_section",
-           "gear_failures"]
+           "gear_failures", "MeshStage", "ChecksResult", "BuildResults", "check_warnings"]
 
 
 # --------------------------------------------------------------------------- contact
@@ -240,3 +245,61 @@ def inspection_section(parts: Mapping[str, "PartInspection"]) -> dict[str, dict[
 
     return {part: {**{f.name: getattr(r, f.name) for f in fields(r)}, "reference_temperature_degc": 20.0,
                    "check_passed": r.check_passed} for part, r in parts.items()}
+
+
+# --------------------------------------------------------------------------- build results
+@dataclass(frozen=True)
+class MeshStage:
+    """The meshes stage: the assembly at the design's chord tolerance and its checks
+    (``checks.meshes`` rows of :func:`prs_geom.mesh.thread.mesh_report`)."""
+
+    assembly: "Assembly"
+    checks: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class ChecksResult:
+    """The checks of a build: the FCL verification of the contacts (``checks.fcl``) and the
+    interference check (``checks.interference``), as those checks report them."""
+
+    fcl: dict[str, Any]
+    interference: dict[str, Any]
+
+
+@dataclass
+class BuildResults:
+    """Each stage's result of a build (None: the stage did not run or has nothing for this
+    design), filled in stage order; the exports render report.json and report.html from it.
+
+    ``warnings`` is the build's warning list (the design's sizing warnings first, then each
+    stage's, in stage order); ``fe_cache``: where the FE influence matrices of the loads stage
+    came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`; None for the analytic model).
+    """
+
+    design: Any
+    warnings: list[str] = field(default_factory=list)
+    contact: ContactResult | None = None
+    gears: "GearAnalysis | None" = None
+    loads: "LoadsResult | None" = None
+    fe_cache: dict[str, Any] | None = None
+    rating: "RatingResult | None" = None
+    #: the tolerance study (:class:`prs_geom.studies.ToleranceStudy`, a layer above the exports)
+    tolerance: Any = None
+    meshes: MeshStage | None = None
+    mechanism: dict[str, Any] | None = None
+    parts_list: list["PartsListRow"] | None = None
+    checks: ChecksResult | None = None
+    inspection: dict[str, "PartInspection"] | None = None
+    machining: dict[str, "MachiningSheet"] | None = None
+
+
+def check_warnings(mesh_checks: list[dict[str, Any]] | None, checks: ChecksResult | None = None) -> list[str]:
+    """Every check whose measured difference exceeds its documented tolerance, as one line
+    each: the ``warnings`` of the mesh checks (rows of ``checks.meshes``) and of the FCL
+    verification."""
+    out = []
+    for row in mesh_checks or []:
+        out += [f"mesh check ({row['part']}): {w}" for w in row.get("warnings", [])]
+    fcl_check = checks.fcl if checks is not None else {}
+    out += [f"FCL check: {w}" for w in (fcl_check or {}).get("warnings", [])]
+    return out
