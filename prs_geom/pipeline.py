@@ -29,14 +29,13 @@ from prs_geom.analysis.load_solver import LoadModel
 from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
-from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, check_warnings, contact_section,
-                                     gear_failures, gears_section, inspection_section, loads_section,
-                                     model_risk_section)
-from prs_geom.geometry.frames import carrier_angles, roller_spin
+from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
+                                     check_warnings, constant_pitch_section, gear_failures, inspection_section,
+                                     report_dict)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
-from prs_geom.model.io import PRS_KINDS, design_hash, design_to_dict, dumps_toml, load_design
+from prs_geom.model.io import PRS_KINDS, design_hash, dumps_toml, load_design
 from prs_geom.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -52,9 +51,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.budget import Estimate
 
 REPORT_NAME = "report.json"
-#: Version of the report.json layout (``format_version``); the JSON Schema
-#: ``prs_geom/exports/schemas/report.schema.json`` describes it.
-REPORT_FORMAT_VERSION = 1
 #: Design classes by the ``kind`` of a design file: both product lines.
 DESIGN_KINDS: dict[str, type] = {**PRS_KINDS, "harmonic": HarmonicDesign}
 
@@ -186,16 +182,15 @@ def _job_label(stage: str) -> str:
 
 @dataclass
 class BuildContext:
-    """What stages share: the design, the temporary output folder, the report being
-    collected (written, never read back by a stage) and each stage's typed result
-    (``results``, filled in stage order, each computed once)."""
+    """What stages share: the design, the temporary output folder and each stage's typed
+    result (``results``, filled in stage order, each computed once; report.json is rendered
+    from it, :func:`prs_geom.exports.report.report_dict`)."""
 
     design: Any
     out: Path
-    report: dict[str, Any]
     progress: ProgressFn = silent
     options: BuildOptions = field(default_factory=BuildOptions)
-    #: each stage's result; its ``warnings`` is the list report.json prints
+    #: each stage's result (a new one, with the design's sizing warnings, when not given)
     results: BuildResults | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
     #: worker processes for the checks, drawings and plots (None: all in this process)
@@ -214,7 +209,9 @@ class BuildContext:
 
     def __post_init__(self) -> None:
         if self.results is None:
-            self.results = BuildResults(self.design, warnings=self.report["warnings"])
+            harmonic = isinstance(self.design, HarmonicDesign)
+            self.results = BuildResults(self.design, kind="harmonic" if harmonic else "prs",
+                                        warnings=[] if harmonic else self.design.sizing_warnings())
 
     def runs(self, stage: str) -> bool:
         """Whether ``stage`` is one of this run's stages."""
@@ -253,32 +250,32 @@ class BuildContext:
         from prs_geom.exports.plots import plot_detached
 
         self.submit(stage, plot_detached, plot, *args)
-        self.report["files"].append(_Pending(stage))
+        self.results.files.append(_Pending(stage))
 
     def collect_plots(self) -> None:
         """Wait for the plots still drawing; put their files and SVG texts in place."""
         files = []
-        for entry in self.report["files"]:
+        for entry in self.results.files:
             if isinstance(entry, _Pending):
                 names, svgs = self.take(entry.job)
                 files += names
                 self.plots_svg.update(svgs)
             else:
                 files.append(entry)
-        self.report["files"] = files
+        self.results.files[:] = files
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
-        self.report["files"].append(name)
+        self.results.files.append(name)
         return path
 
     def add_file(self, name: str) -> Path:
         """Register a file a stage writes itself; returns its path in the output folder."""
         path = self.out / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.report["files"].append(name)
+        self.results.files.append(name)
         return path
 
 
@@ -292,17 +289,13 @@ def stage_design(ctx: BuildContext) -> None:
 def stage_pitch(ctx: BuildContext) -> None:
     """Pitch lists of the three parts (tooth 1 at the loaded end)."""
     d = ctx.design
-    ctx.report["pitch"] = {
-        "screw_mm": list(d.pitch_list("screw")),
-        "roller_mm": list(d.pitch_list("roller")),
-        "nut_mm": list(d.pitch_list("nut")),
-    }
+    ctx.results.pitch = PitchLists(screw_mm=tuple(d.pitch_list("screw")), roller_mm=tuple(d.pitch_list("roller")),
+                                   nut_mm=tuple(d.pitch_list("nut")))
 
 
 def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
     ctx.results.contact = analyse_contact(ctx.design)
-    ctx.report["contact"] = contact_section(ctx.results.contact)
     if ctx.runs("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
     if ctx.runs("manufacturing"):
@@ -318,7 +311,6 @@ def stage_gears(ctx: BuildContext) -> None:
 
     ctx.results.gears = analyse_gears(ctx.design)
     if ctx.results.gears is not None:
-        ctx.report["gears"] = gears_section(ctx.results.gears)
         if not ctx.results.gears.passed:
             ctx.results.warnings.append("end gears: " + ", ".join(gear_failures(ctx.results.gears)) + " failed (report gears)")
 
@@ -332,8 +324,6 @@ def stage_loads(ctx: BuildContext) -> None:
     ctx.results.loads = loads = analyse_loads(d, ctx.results.contact, progress=ctx.progress, model=models.model,
                                       compare=models.compare)
     ctx.results.fe_cache = models.cache_report
-    rep = loads_section(loads.distribution, ctx.results.fe_cache)
-    ctx.report["loads"] = rep
     if models.cache is not None:
         ctx.results.warnings += list(models.cache.warnings)
     if models.cache is not None and not models.cache.stored:
@@ -344,12 +334,9 @@ def stage_loads(ctx: BuildContext) -> None:
         from prs_geom.exports.plots import plot_model_risk
 
         ctx.add_plot("model_risk", plot_model_risk, ctx.out, d.name, loads.model_risk)
-    ctx.report["model_risk"] = model_risk_section(loads.model_risk)
-    equal = loads.equal_load
-    ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
     p = d.thread.pitch_mm
     pr, pn = np.array(loads.designed_roller_mm), np.array(loads.designed_nut_mm)
-    ctx.add_plot("loads", plot_loads, ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc,
+    ctx.add_plot("loads", plot_loads, ctx.out, d.name, constant_pitch_section(loads.distribution), loads.designed_ldc,
                  loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
 
 
@@ -369,7 +356,7 @@ def stage_rating(ctx: BuildContext) -> None:
     d, loads = ctx.design, ctx.results.loads
     equal = (loads.equal_load.roller_mm, loads.equal_load.nut_mm)
     ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
-    ctx.report["rating"] = sec = r.section
+    sec = r.section
     lim = sec["limits"]
     if not lim["speed_ok"]:
         ctx.results.warnings.append(
@@ -397,7 +384,6 @@ def stage_tolerance(ctx: BuildContext) -> None:
     workers = ctx.background.workers if ctx.background is not None else 0
     ctx.results.tolerance = study = tolerance_study(d, contact=ctx.results.contact, model=ctx.results.loads.model,
                                             execution=Execution(workers=max(workers, 1), progress=ctx.progress))
-    ctx.report["tolerance"] = study.section
     per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
     ctx.add_plot("tolerance", plot_tolerance, ctx.out, d.name, study.worst,
                  per_case if len(per_case) > 1 else [], float(study.deterministic.max()))
@@ -435,16 +421,9 @@ def stage_meshes(ctx: BuildContext) -> None:
     else:
         rows = mesh_checks_job(d, asm.parts, ctx.progress)
         ctx.results.meshes = MeshStage(asm, rows)
-        ctx.report["checks"]["meshes"] = rows
-    ctx.report["assembly"] = {
-        "parts": list(asm.placed),
-        "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
-        "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
-        "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
-    }
     nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
-        ctx.report["files"].append(name)
+        ctx.results.files.append(name)
     if ctx.options.step:
         from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids, write_step
 
@@ -464,8 +443,8 @@ def stage_meshes(ctx: BuildContext) -> None:
             if f"{part}_lo" in asm.placed:
                 record(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
                                           ctx.out / f"{part}.step"))
-        ctx.report["step"] = section
-        ctx.report["files"] += section["files"]
+        ctx.results.step = section
+        ctx.results.files += section["files"]
         for part, row in section["parts"].items():
             if not row["valid"]:
                 ctx.results.warnings.append(f"STEP: the {part} could not be made a valid solid; "
@@ -492,9 +471,7 @@ def stage_checks(ctx: BuildContext) -> None:
     if "meshes" in ctx.jobs:
         rows = ctx.take("meshes")
         ctx.results.meshes = MeshStage(ctx.results.meshes.assembly, rows)
-        ctx.report["checks"]["meshes"] = rows
     ctx.results.checks = checks = ctx.take("checks")
-    ctx.report["checks"].update({"fcl": checks.fcl, "interference": checks.interference})
     ctx.results.warnings += check_warnings(ctx.results.meshes.checks if ctx.results.meshes else None, checks)
 
 
@@ -519,19 +496,18 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     from prs_geom.analysis.inspection import inspection
 
     ctx.results.inspection = inspection(ctx.design, ctx.results.contact)
-    ctx.report["inspection"] = insp = inspection_section(ctx.results.inspection)
+    insp = inspection_section(ctx.results.inspection)
     from prs_geom.exports.sheets import inspection_csv
 
     ctx.write_text("inspection.csv", inspection_csv(insp))
     ctx.results.machining = sheets = machining_sheets(ctx.design, ctx.results.contact, insp)
-    ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
     write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, _build_date())
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.results.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
-    ctx.report["files"] += ctx.take("manufacturing")  # the drawings, started after the contact stage
+    ctx.results.files += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
 
 def stage_mechanism(ctx: BuildContext) -> None:
@@ -548,7 +524,7 @@ def stage_mechanism(ctx: BuildContext) -> None:
     if lay is not None:
         from prs_geom.checks.mechanism import mechanism_section
 
-        ctx.results.mechanism = ctx.report["mechanism"] = sec = mechanism_section(asm, lay, lay.ring.designation)
+        ctx.results.mechanism = sec = mechanism_section(asm, lay, lay.ring.designation)
         if not sec["passed"]:
             failed = [c["name"] for c in sec["checks"] if not c["passed"]]
             ctx.results.warnings.append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
@@ -559,10 +535,9 @@ def stage_mechanism(ctx: BuildContext) -> None:
     except ValueError:
         pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
     else:
-        ctx.report["kinematics"] = kinematics(d, ctx.results.contact).as_dict()
+        ctx.results.kinematics = kinematics(d, ctx.results.contact)
     rows = parts_list(d, asm)
     ctx.results.parts_list = rows
-    ctx.report["parts_list"] = [r.as_dict() for r in rows]
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())
 
@@ -593,27 +568,6 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
 ]
 
 
-def new_report(design) -> dict[str, Any]:
-    """The report skeleton; its JSON Schema is ``prs_geom/exports/schemas/report.schema.json``."""
-    if isinstance(design, HarmonicDesign):
-        return {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
-                "design": design_to_dict(design), "warnings": [], "harmonic": None, "checks": {},
-                "timings_s": {}, "files": []}
-    return {
-        "format_version": REPORT_FORMAT_VERSION,
-        "prs_geom_version": __version__,
-        "design": design_to_dict(design),
-        "warnings": design.sizing_warnings(),
-        "contact": None,
-        "loads": None,
-        "pitch": None,
-        "checks": {},
-        "machining": None,
-        "timings_s": {},
-        "files": [],
-    }
-
-
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None) -> BuildContext:
@@ -630,20 +584,20 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
 
     stages = STAGES if stages is None else stages
     with Background(workers) as background:
-        ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress,
+        ctx = BuildContext(design=design, out=out, progress=progress,
                            options=options or BuildOptions(), background=background, stages=list(stages))
         for name, fn in stages:
             ctx.current_stage = name
             begin_stage(progress, name)
             t0 = time.perf_counter()
             fn(ctx)
-            ctx.report["timings_s"][name] = time.perf_counter() - t0
+            ctx.results.timings_s[name] = time.perf_counter() - t0
             end_stage(progress, name)
         ctx.current_stage = "end"
         ctx.collect_plots()
         for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
             ctx.take(key)
-    timings = ctx.report["timings_s"]
+    timings = ctx.results.timings_s
     for name in timings:
         timings[name] += ctx.worker_seconds.get(name, 0.0) - ctx.waited.get(name, 0.0)
     return ctx
@@ -658,10 +612,9 @@ def harmonic_stage(ctx: BuildContext) -> None:
     from prs_geom.harmonic.model import harmonic_report
 
     d = ctx.design
-    rep = harmonic_report(d)
-    ctx.report["harmonic"] = rep
+    rep = ctx.results.harmonic = harmonic_report(d)
     ctx.write_text("ratio_table.csv", ratio_table_csv(rep["table"]))
-    ctx.report["files"] += plot_ratio(d, ctx.out)
+    ctx.results.files += plot_ratio(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))
     rows = []
     tol = d.mesh.chord_tolerance_mm
@@ -677,12 +630,16 @@ def harmonic_stage(ctx: BuildContext) -> None:
                      "max_deviation_mm": dev,
                      "warnings": [f"measured deviation {dev:.3g} mm exceeds the chord tolerance {tol:g} mm"]
                      if dev > tol else []})
-    ctx.report["checks"]["meshes"] = rows
+    ctx.results.harmonic_meshes = rows
     ctx.results.warnings += check_warnings(rows)
     from prs_geom.harmonic.exports import harmonic_outputs
 
     # the placed assembly (wave generator, deformed flexspline), GLB, 3MF and report.html
-    ctx.report["files"] += harmonic_outputs(d, ctx.out, ctx.report, _build_date(), __version__)
+    report = report_dict(ctx.results)
+    ctx.results.files += harmonic_outputs(d, ctx.out, report, _build_date(), __version__)
+    # harmonic_outputs writes its sections into the report it is given (the harmonic line's API)
+    ctx.results.harmonic_assembly = report["assembly"]
+    ctx.results.harmonic_assembly_checks = report["checks"]["assembly"]
 
 
 HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
@@ -768,8 +725,9 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
         with watch, atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,
                              workers=workers)
-            ctx.report["files"].append(REPORT_NAME)
-            (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+            ctx.results.files.append(REPORT_NAME)
+            report = report_dict(ctx.results)
+            (tmp / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     except ResourceLimitError:
         raise
     except OSError as exc:
@@ -780,4 +738,4 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
         if watch.breached:   # a worker killed for the budget, met as a broken pool
             raise watch.error() from None
         raise
-    return ctx.report
+    return report

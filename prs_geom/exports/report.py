@@ -20,6 +20,7 @@ from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, Mo
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.gears import GearAnalysis
     from prs_geom.analysis.inspection import PartInspection
+    from prs_geom.analysis.kinematics import Kinematics
     from prs_geom.analysis.machining import MachiningSheet
     from prs_geom.analysis.rating import RatingResult
     from prs_geom.exports.bom import PartsListRow
@@ -28,7 +29,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["ANGLE_CONVENTIONS", "MODEL_RISK_NOT_COMPUTED", "contact_section", "gears_section",
            "load_details_dict", "loads_section", "model_risk_section", "inspection_section",
-           "gear_failures", "MeshStage", "ChecksResult", "BuildResults", "check_warnings"]
+           "gear_failures", "MeshStage", "ChecksResult", "BuildResults", "check_warnings",
+           "REPORT_FORMAT_VERSION", "PitchLists", "constant_pitch_section", "assembly_section", "report_dict"]
 
 
 # --------------------------------------------------------------------------- contact
@@ -177,11 +179,19 @@ def load_details_dict(details: LoadModelDetails | None, cache: Mapping[str, Any]
     return out
 
 
+def constant_pitch_section(dist: LoadDistribution) -> dict[str, Any]:
+    """``loads.constant_pitch``: the coefficients of both sides with constant pitch and the
+    worst of them."""
+    rc = dist.constant_pitch
+    return {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
+            "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))}
+
+
 def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The ``loads`` section: coefficients and tooth loads at the design load, constant
     pitch, the linear model, stiffness, off-design, sensitivity and the compliances.
     ``cache``: as for :func:`load_details_dict`."""
-    r, rc, lin, model = dist.result, dist.constant_pitch, dist.linear, dist.model
+    r, lin, model = dist.result, dist.linear, dist.model
     return {
         "design_load_N": dist.design_load_n,
         "installation": dist.installation,
@@ -192,8 +202,7 @@ def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None
         "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
         "axial_stiffness_N_per_um": dist.stiffness["secant_N_per_um"],
         "axial_stiffness": dist.stiffness,
-        "constant_pitch": {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
-                           "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))},
+        "constant_pitch": constant_pitch_section(dist),
         "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),
                          "linearised_at_N": r.mean},
         "off_design": dist.off_design,
@@ -248,6 +257,20 @@ def inspection_section(parts: Mapping[str, "PartInspection"]) -> dict[str, dict[
 
 
 # --------------------------------------------------------------------------- build results
+#: Version of the report.json layout (``format_version``); the JSON Schema
+#: ``prs_geom/exports/schemas/report.schema.json`` describes it.
+REPORT_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class PitchLists:
+    """The pitch lists of the three parts (mm, tooth 1 at the loaded end)."""
+
+    screw_mm: tuple[float, ...]
+    roller_mm: tuple[float, ...]
+    nut_mm: tuple[float, ...]
+
+
 @dataclass(frozen=True)
 class MeshStage:
     """The meshes stage: the assembly at the design's chord tolerance and its checks
@@ -277,20 +300,37 @@ class BuildResults:
     """
 
     design: Any
+    #: ``"prs"`` or ``"harmonic"`` (the product line of ``design``)
+    kind: str = "prs"
     warnings: list[str] = field(default_factory=list)
+    pitch: PitchLists | None = None
     contact: ContactResult | None = None
     gears: "GearAnalysis | None" = None
-    loads: "LoadsResult | None" = None
+    loads: LoadsResult | None = None
     fe_cache: dict[str, Any] | None = None
     rating: "RatingResult | None" = None
     #: the tolerance study (:class:`prs_geom.studies.ToleranceStudy`, a layer above the exports)
     tolerance: Any = None
     meshes: MeshStage | None = None
+    #: the ``step`` section of :func:`prs_geom.exports.step.write_step` (``--step`` builds)
+    step: dict[str, Any] | None = None
+    #: the ``mechanism`` section of :func:`prs_geom.checks.mechanism.mechanism_section`
     mechanism: dict[str, Any] | None = None
+    kinematics: "Kinematics | None" = None
     parts_list: list["PartsListRow"] | None = None
     checks: ChecksResult | None = None
     inspection: dict[str, "PartInspection"] | None = None
     machining: dict[str, "MachiningSheet"] | None = None
+    #: the harmonic line: its ``harmonic`` section, mesh checks, ``assembly`` section and
+    #: assembly checks (``checks.assembly``)
+    harmonic: dict[str, Any] | None = None
+    harmonic_meshes: list[dict[str, Any]] | None = None
+    harmonic_assembly: dict[str, Any] | None = None
+    harmonic_assembly_checks: dict[str, Any] | None = None
+    #: every file written, in writing order (output-relative paths)
+    files: list[str] = field(default_factory=list)
+    #: each stage's time (s), by stage name in run order
+    timings_s: dict[str, float] = field(default_factory=dict)
 
 
 def check_warnings(mesh_checks: list[dict[str, Any]] | None, checks: ChecksResult | None = None) -> list[str]:
@@ -303,3 +343,108 @@ def check_warnings(mesh_checks: list[dict[str, Any]] | None, checks: ChecksResul
     fcl_check = checks.fcl if checks is not None else {}
     out += [f"FCL check: {w}" for w in (fcl_check or {}).get("warnings", [])]
     return out
+
+
+def assembly_section(results: BuildResults) -> dict[str, Any]:
+    """The ``assembly`` section: the placed parts, the rollers' carrier angles and spins (deg)
+    and the triangle count of the meshes stage's assembly."""
+    from prs_geom.geometry.frames import carrier_angles, roller_spin
+
+    d, asm = results.design, results.meshes.assembly
+    return {
+        "parts": list(asm.placed),
+        "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
+        "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
+        "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
+    }
+
+
+def _pitch_section(results: BuildResults) -> dict[str, Any] | None:
+    """The ``pitch`` section: the pitch lists, with the equal-load lists of the loads stage."""
+    if results.pitch is None:
+        return None
+    out: dict[str, Any] = {"screw_mm": list(results.pitch.screw_mm), "roller_mm": list(results.pitch.roller_mm),
+                           "nut_mm": list(results.pitch.nut_mm)}
+    if results.loads is not None:
+        equal = results.loads.equal_load
+        out["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
+    return out
+
+
+def _checks_section(results: BuildResults) -> dict[str, Any]:
+    """The ``checks`` section: the mesh checks, the FCL verification and the interference
+    check, those that ran."""
+    out: dict[str, Any] = {}
+    if results.harmonic_meshes is not None:
+        out["meshes"] = results.harmonic_meshes
+    if results.harmonic_assembly_checks is not None:
+        out["assembly"] = results.harmonic_assembly_checks
+    if results.meshes is not None:
+        out["meshes"] = results.meshes.checks
+    if results.checks is not None:
+        out.update({"fcl": results.checks.fcl, "interference": results.checks.interference})
+    return out
+
+
+def _harmonic_report(results: BuildResults) -> dict[str, Any]:
+    from prs_geom._version import __version__
+    from prs_geom.model.io import design_to_dict
+
+    out = {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
+           "design": design_to_dict(results.design), "warnings": results.warnings, "harmonic": results.harmonic,
+           "checks": _checks_section(results), "timings_s": results.timings_s, "files": results.files}
+    if results.harmonic_assembly is not None:
+        out["assembly"] = results.harmonic_assembly
+    return out
+
+
+def _stage_sections(results: BuildResults) -> dict[str, Any]:
+    """The sections of the stages that ran and have one, in stage order."""
+    out: dict[str, Any] = {}
+    if results.gears is not None:
+        out["gears"] = gears_section(results.gears)
+    if results.loads is not None:
+        out["model_risk"] = model_risk_section(results.loads.model_risk)
+    if results.rating is not None:
+        out["rating"] = results.rating.section
+    if results.tolerance is not None:
+        out["tolerance"] = results.tolerance.section
+    if results.meshes is not None:
+        out["assembly"] = assembly_section(results)
+    if results.step is not None:
+        out["step"] = results.step
+    if results.mechanism is not None:
+        out["mechanism"] = results.mechanism
+    if results.kinematics is not None:
+        out["kinematics"] = results.kinematics.as_dict()
+    if results.parts_list is not None:
+        out["parts_list"] = [r.as_dict() for r in results.parts_list]
+    if results.inspection is not None:
+        out["inspection"] = inspection_section(results.inspection)
+    return out
+
+
+def report_dict(results: BuildResults) -> dict[str, Any]:
+    """report.json of a build from its results: the layout of
+    ``prs_geom/exports/schemas/report.schema.json``, sections in stage order (a stage that did
+    not run leaves its skeleton entry None, or has no entry)."""
+    if results.kind == "harmonic":
+        return _harmonic_report(results)
+    from prs_geom._version import __version__
+    from prs_geom.model.io import design_to_dict
+
+    return {
+        "format_version": REPORT_FORMAT_VERSION,
+        "prs_geom_version": __version__,
+        "design": design_to_dict(results.design),
+        "warnings": results.warnings,
+        "contact": contact_section(results.contact) if results.contact is not None else None,
+        "loads": loads_section(results.loads.distribution, results.fe_cache) if results.loads is not None else None,
+        "pitch": _pitch_section(results),
+        "checks": _checks_section(results),
+        "machining": ({part: sh.as_dict() for part, sh in results.machining.items()}
+                      if results.machining is not None else None),
+        "timings_s": results.timings_s,
+        "files": results.files,
+        **_stage_sections(results),
+    }
