@@ -350,7 +350,7 @@ def cmd_rating(args: argparse.Namespace) -> int:
         res = studies.robust_pitch(design, spectrum, tol, samples=samples, contact=contact, model=model,
                                    execution=studies.Execution(workers=1))
         robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
-    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).report()
+    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).section
     from prs_geom.analysis.rating import limit_warnings
 
     failed = limit_warnings(rep["limits"]["checks"])

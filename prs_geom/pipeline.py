@@ -1,9 +1,11 @@
 """The build pipeline and the Python API: design -> analysis -> meshes -> checks -> exports.
 
-Each stage computes its result once and keeps it on the :class:`BuildContext`
-(``ctx.results.contact``, ``ctx.results.loads``, ``ctx.results.meshes``, ...); later stages and the exporters take
-those objects, never the report dict or another stage's files. The report dict only
-collects what is written to ``report.json``.
+Each stage computes its result once and keeps it in the typed
+:class:`~prs_geom.exports.report.BuildResults` of the :class:`BuildContext`
+(``ctx.results.contact``, ``ctx.results.loads``, ``ctx.results.meshes``, ...); later stages
+and the exporters take those objects, never another stage's files. ``report.json`` and
+``report.html`` are rendered from them by the export layer
+(:func:`prs_geom.exports.report.report_dict`, :func:`prs_geom.exports.html.write_html`).
 
 ``build`` runs every stage available on a design and writes all exports plus
 ``report.json`` into an output folder atomically (:mod:`prs_geom.exports.output`); stages
@@ -50,6 +52,14 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.fe_cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
 
+__all__ = ["REPORT_NAME", "DESIGN_KINDS", "load_any_design", "Analysis", "LoadModels", "load_models", "analyse",
+           "design_pitch", "build_meshes", "BuildOptions", "BuildContext", "stage_design", "stage_pitch",
+           "stage_contact", "stage_gears", "stage_loads", "BUILD_ROBUST_NOTE", "stage_rating", "stage_tolerance",
+           "mesh_checks_job", "stage_meshes", "checks_job", "stage_checks", "stage_manufacturing",
+           "stage_mechanism", "stage_html", "STAGES", "run_stages", "harmonic_stage", "HARMONIC_STAGES",
+           "plan_build", "build"]
+
+#: The file name of the build report in the output folder.
 REPORT_NAME = "report.json"
 #: Design classes by the ``kind`` of a design file: both product lines.
 DESIGN_KINDS: dict[str, type] = {**PRS_KINDS, "harmonic": HarmonicDesign}

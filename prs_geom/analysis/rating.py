@@ -603,9 +603,6 @@ class RatingResult:
     section: dict[str, Any]
     curves: dict[str, Any] = field(default_factory=dict, compare=False)
 
-    def report(self) -> dict[str, Any]:
-        return self.section
-
 
 def _variants(design: PRSDesign, model: LoadModel, equal_lists: tuple[Sequence[float], Sequence[float]] | None,
               robust_lists: tuple[Sequence[float], Sequence[float]] | None) -> dict[str, tuple[NDArray, NDArray]]:

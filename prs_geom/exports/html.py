@@ -46,6 +46,10 @@ from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.io import design_hash, design_to_dict
 
+__all__ = ["DISPLAY_TOLERANCE_MM", "COLOURS", "scene_payload", "three_js", "Q", "Raw", "num", "prose", "TEXT_CLASS",
+           "table", "design_rows", "page_template", "fill_template", "TOC_MARK", "page_head", "toc", "page_body",
+           "svg_element", "write_html"]
+
 #: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
 DISPLAY_TOLERANCE_MM = 0.1
 

@@ -17,6 +17,8 @@ from typing import Any
 import jsonschema
 from jsonschema.exceptions import best_match
 
+__all__ = ["SCHEMA_PACKAGE", "SCHEMA_NAME", "load_schema", "validate_report"]
+
 SCHEMA_PACKAGE = "prs_geom.exports.schemas"
 SCHEMA_NAME = "report.schema.json"
 
