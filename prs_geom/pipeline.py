@@ -532,11 +532,11 @@ def stage_mechanism(ctx: BuildContext) -> None:
     asm = ctx.results.meshes.assembly
     lay = layout(d)
     if lay is not None:
-        from prs_geom.checks.mechanism import mechanism_section
+        from prs_geom.checks.mechanism import check_mechanism
 
-        ctx.results.mechanism = sec = mechanism_section(asm, lay, lay.ring.designation)
-        if not sec["passed"]:
-            failed = [c["name"] for c in sec["checks"] if not c["passed"]]
+        ctx.results.mechanism = mech = check_mechanism(asm, lay, lay.ring.designation)
+        if not mech.passed:
+            failed = [name for name, ok in mech.checks if not ok]
             ctx.results.warnings.append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 

@@ -41,7 +41,7 @@ from prs_geom.analysis.loads import LoadsResult
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.exports.numbers import exact, format_cell, format_quantity, key_label, unit_label
 from prs_geom.exports.report import (MODEL_RISK_NOT_COMPUTED, BuildResults, contact_section, gears_section,
-                                     inspection_section, loads_section)
+                                     inspection_section, loads_section, mechanism_section)
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.io import design_hash, design_to_dict
@@ -743,8 +743,8 @@ def _analysis_html(results: BuildResults, svgs: dict[str, str]) -> list[str]:
     gears = _gears_shown(results)
     if gears:
         parts.append(_gears_html(gears))
-    if results.mechanism:
-        parts.append(_mechanism_html(results.mechanism))
+    if results.mechanism is not None:
+        parts.append(_mechanism_html(mechanism_section(results.mechanism)))
     if results.parts_list:
         parts.append(_parts_list_html([r.as_dict() for r in results.parts_list]))
     return parts

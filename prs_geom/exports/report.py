@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.kinematics import Kinematics
     from prs_geom.analysis.machining import MachiningSheet
     from prs_geom.analysis.rating import RatingResult
+    from prs_geom.checks.mechanism import MechanismCheck
     from prs_geom.exports.bom import PartsListRow
     from prs_geom.geometry.gears import SpurGear
     from prs_geom.mesh.assembly import Assembly
@@ -30,7 +31,8 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ANGLE_CONVENTIONS", "MODEL_RISK_NOT_COMPUTED", "contact_section", "gears_section",
            "load_details_dict", "loads_section", "model_risk_section", "inspection_section",
            "gear_failures", "MeshStage", "ChecksResult", "BuildResults", "check_warnings",
-           "REPORT_FORMAT_VERSION", "PitchLists", "constant_pitch_section", "assembly_section", "report_dict"]
+           "REPORT_FORMAT_VERSION", "PitchLists", "constant_pitch_section", "assembly_section", "report_dict",
+           "mechanism_section"]
 
 
 # --------------------------------------------------------------------------- contact
@@ -256,6 +258,35 @@ def inspection_section(parts: Mapping[str, "PartInspection"]) -> dict[str, dict[
                    "check_passed": r.check_passed} for part, r in parts.items()}
 
 
+# --------------------------------------------------------------------------- mechanism
+def mechanism_section(m: "MechanismCheck") -> dict[str, Any]:
+    """The ``mechanism`` section: sizes, fits, journal clearances, stack-up, and a pass/fail
+    list of the checks."""
+    lay, ring = m.layout, m.layout.ring
+    checks = [{"name": name, "passed": ok} for name, ok in m.checks]
+    return {
+        "journal_diameter_mm": lay.journal_diameter_mm,
+        "carrier": {"inner_diameter_mm": 2 * lay.carrier_inner_radius_mm,
+                    "outer_diameter_mm": 2 * lay.carrier_outer_radius_mm,
+                    "thickness_mm": lay.carrier_thickness_mm},
+        "retaining_ring": {"designation": m.ring_designation, "bore_mm": ring.bore_mm,
+                           "thickness_mm": ring.thickness_mm, "groove_diameter_mm": ring.groove_diameter_mm,
+                           "groove_width_mm": ring.groove_width_mm, "edge_distance_mm": ring.edge_distance_mm,
+                           "section_width_mm": ring.section_width_mm},
+        "nut_end": {"bore_diameter_mm": 2 * lay.nut_bore_radius_mm, "length_mm": lay.ends[0].nut_end[1]
+                    - lay.ends[0].nut_end[0]},
+        "axial_layout_mm": [{"end": side, "gear": list(e.gear_zone), "journal": list(e.journal),
+                             "carrier": list(e.carrier), "retaining_ring": list(e.ring),
+                             "groove": list(e.groove), "nut_end": list(e.nut_end)}
+                            for side, e in zip(("lo", "hi"), lay.ends)],
+        "fits": [f.report() for f in m.fits],
+        "journal_clearances": list(m.journal_clearances),
+        "stack_up": lay.stack.report(),
+        "checks": checks,
+        "passed": all(c["passed"] for c in checks),
+    }
+
+
 # --------------------------------------------------------------------------- build results
 #: Version of the report.json layout (``format_version``); the JSON Schema
 #: ``prs_geom/exports/schemas/report.schema.json`` describes it.
@@ -314,8 +345,7 @@ class BuildResults:
     meshes: MeshStage | None = None
     #: the ``step`` section of :func:`prs_geom.exports.step.write_step` (``--step`` builds)
     step: dict[str, Any] | None = None
-    #: the ``mechanism`` section of :func:`prs_geom.checks.mechanism.mechanism_section`
-    mechanism: dict[str, Any] | None = None
+    mechanism: "MechanismCheck | None" = None
     kinematics: "Kinematics | None" = None
     parts_list: list["PartsListRow"] | None = None
     checks: ChecksResult | None = None
@@ -414,7 +444,7 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
     if results.step is not None:
         out["step"] = results.step
     if results.mechanism is not None:
-        out["mechanism"] = results.mechanism
+        out["mechanism"] = mechanism_section(results.mechanism)
     if results.kinematics is not None:
         out["kinematics"] = results.kinematics.as_dict()
     if results.parts_list is not None:
