@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from prs_geom.analysis.contact import ContactResult
-from prs_geom.analysis.loads import LoadsResult
+from prs_geom.analysis.loads import LoadModel, LoadsResult, compliance_model
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.exports.numbers import exact, format_cell, format_quantity, key_label, unit_label
 from prs_geom.exports.report import (MODEL_RISK_NOT_COMPUTED, BuildResults, contact_section, gears_section,
@@ -458,20 +458,21 @@ def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     return "".join(out)
 
 
-def _compliance_text(comp: dict[str, Any]) -> str:
-    """One sentence naming the tooth-compliance model of a loads section (plain text)."""
-    details = comp.get("details", {})
-    if comp.get("model") == "fe":
-        fe = details["fe"]
-        cache = fe.get("cache", {})
-        hits = cache.get("read_from_cache", {})
-        src = ("read from the cache" if hits and all(hits.values()) else "computed and cached") if cache else "computed"
+def _compliance_text(model: LoadModel, fe_cache: dict[str, Any] | None) -> str:
+    """One sentence naming the tooth-compliance model of a load model (plain text);
+    ``fe_cache``: where its FE influence matrices came from (None: computed, not cached)."""
+    details = model.details
+    if compliance_model(model) == "fe" and details is not None and details.fe is not None:
+        fe = details.fe
+        hits = (fe_cache or {}).get("read_from_cache", {})
+        src = ("read from the cache" if hits and all(hits.values()) else "computed and cached") if fe_cache \
+            else "computed"
         return (f"Tooth compliance: axisymmetric finite-element influence matrices (mesh level "
-                f"{format_cell(fe['mesh_level'])}, {format_cell(fe['teeth'])} teeth, {format_cell(fe['n_dofs'])} "
+                f"{format_cell(fe.mesh_level)}, {format_cell(fe.teeth)} teeth, {format_cell(fe.n_dofs)} "
                 f"degrees of freedom, {src}), coupled between teeth and between a roller's flanks; Hertz contact "
                 f"and 1D bodies as in the analytic model.")
     return (f"Tooth compliance: Yamamoto's terms, diagonal, width convention "
-            f"'{details.get('tooth_width', '')}'.")
+            f"'{details.tooth_width if details is not None else ''}'.")
 
 
 def _range(lo: Any, hi: Any, key: str) -> Raw:
@@ -481,7 +482,7 @@ def _range(lo: Any, hi: Any, key: str) -> Raw:
 def _model_risk_html(loads: LoadsResult, svgs: dict[str, str], fe_cache: dict[str, Any] | None) -> str:
     """The model-risk part of the loads section: every set of pitch lists under every
     compliance model (table at the design load, worst over the loads, plots)."""
-    out = [f"<p class='note'>{prose(_compliance_text(loads_section(loads.distribution, fe_cache)['compliances']))}</p>",
+    out = [f"<p class='note'>{prose(_compliance_text(loads.model, fe_cache))}</p>",
            "<h3 id='model-risk'>Model risk: analytic against finite-element compliance</h3>"]
     risk = loads.model_risk
     if risk is None:
