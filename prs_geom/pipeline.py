@@ -32,8 +32,9 @@ from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
 from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
-                                     check_warnings, constant_pitch_section, gear_failures, inspection_section,
-                                     report_dict)
+                                     check_warnings, constant_pitch_section, fe_cache_warnings, gear_warnings,
+                                     inspection_section, mechanism_warnings, rating_warnings, report_dict,
+                                     step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
@@ -311,8 +312,8 @@ def stage_contact(ctx: BuildContext) -> None:
     if ctx.runs("manufacturing"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
-        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(), __version__,
-                   progress=True)
+        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
+                   __version__, progress=True)
 
 
 def stage_gears(ctx: BuildContext) -> None:
@@ -321,8 +322,7 @@ def stage_gears(ctx: BuildContext) -> None:
 
     ctx.results.gears = analyse_gears(ctx.design)
     if ctx.results.gears is not None:
-        if not ctx.results.gears.passed:
-            ctx.results.warnings.append("end gears: " + ", ".join(gear_failures(ctx.results.gears)) + " failed (report gears)")
+        ctx.results.warnings += gear_warnings(ctx.results.gears)
 
 
 def stage_loads(ctx: BuildContext) -> None:
@@ -332,22 +332,18 @@ def stage_loads(ctx: BuildContext) -> None:
     d = ctx.design
     models = load_models(d, ctx.results.contact, ctx.progress)
     ctx.results.loads = loads = analyse_loads(d, ctx.results.contact, progress=ctx.progress, model=models.model,
-                                      compare=models.compare)
+                                              compare=models.compare)
     ctx.results.fe_cache = models.cache_report
     if models.cache is not None:
-        ctx.results.warnings += list(models.cache.warnings)
-    if models.cache is not None and not models.cache.stored:
-        ctx.results.warnings.append(f"the finite-element influence matrices could not be stored in "
-                                      f"{models.cache.folder} (they were computed and used; set "
-                                      f"$PRS_GEOM_CACHE to a writable folder to keep them)")
+        ctx.results.warnings += fe_cache_warnings(models.cache)
     if loads.model_risk is not None:
         from prs_geom.exports.plots import plot_model_risk
 
         ctx.add_plot("model_risk", plot_model_risk, ctx.out, d.name, loads.model_risk)
     p = d.thread.pitch_mm
     pr, pn = np.array(loads.designed_roller_mm), np.array(loads.designed_nut_mm)
-    ctx.add_plot("loads", plot_loads, ctx.out, d.name, constant_pitch_section(loads.distribution), loads.designed_ldc,
-                 loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
+    ctx.add_plot("loads", plot_loads, ctx.out, d.name, constant_pitch_section(loads.distribution),
+                 loads.designed_ldc, loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
 
 
 #: Why the build has no robust pitch in its rating section.
@@ -365,17 +361,9 @@ def stage_rating(ctx: BuildContext) -> None:
 
     d, loads = ctx.design, ctx.results.loads
     equal = (loads.equal_load.roller_mm, loads.equal_load.nut_mm)
-    ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
-    sec = r.section
-    lim = sec["limits"]
-    if not lim["speed_ok"]:
-        ctx.results.warnings.append(
-            f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
-            f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
-    if not lim["buckling_ok"]:
-        ctx.results.warnings.append(
-            f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
-            f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal,
+                                            robust_note=BUILD_ROBUST_NOTE)
+    ctx.results.warnings += rating_warnings(r)
     ctx.add_plot("rating", plot_rating, ctx.out, d.name, r.curves)
 
 
@@ -447,7 +435,8 @@ def stage_meshes(ctx: BuildContext) -> None:
                 section["files"].append(one["file"])
 
         for part in ("screw", "roller", "nut"):
-            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.results.contact.screw_profile))
+            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,),
+                                    screw_profile=ctx.results.contact.screw_profile))
         # the carrier and the ring (when the design has them) as exact B-reps, a file each
         for part in MECHANISM_STEP_PARTS:
             if f"{part}_lo" in asm.placed:
@@ -455,10 +444,7 @@ def stage_meshes(ctx: BuildContext) -> None:
                                           ctx.out / f"{part}.step"))
         ctx.results.step = section
         ctx.results.files += section["files"]
-        for part, row in section["parts"].items():
-            if not row["valid"]:
-                ctx.results.warnings.append(f"STEP: the {part} could not be made a valid solid; "
-                                              f"{part}.step was not written: {row['reason']}")
+        ctx.results.warnings += step_warnings(section)
 
 
 def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> ChecksResult:
@@ -534,10 +520,8 @@ def stage_mechanism(ctx: BuildContext) -> None:
     if lay is not None:
         from prs_geom.checks.mechanism import check_mechanism
 
-        ctx.results.mechanism = mech = check_mechanism(asm, lay, lay.ring.designation)
-        if not mech.passed:
-            failed = [name for name, ok in mech.checks if not ok]
-            ctx.results.warnings.append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
+        ctx.results.mechanism = check_mechanism(asm, lay, lay.ring.designation)
+        ctx.results.warnings += mechanism_warnings(ctx.results.mechanism)
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 
     try:

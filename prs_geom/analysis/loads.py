@@ -85,7 +85,8 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
            "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
-           "LoadDistribution", "LOAD_FRACTIONS", "load_distribution", "analyse_loads", "LoadsResult", "PitchDesign", "ellipticity", "hertz_constant",
+           "LoadDistribution", "LOAD_FRACTIONS", "load_distribution", "analyse_loads", "LoadsResult", "PitchDesign",
+           "ellipticity", "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
            "check_load_scale"]

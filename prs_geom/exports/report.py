@@ -28,11 +28,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.geometry.gears import SpurGear
     from prs_geom.mesh.assembly import Assembly
 
-__all__ = ["ANGLE_CONVENTIONS", "MODEL_RISK_NOT_COMPUTED", "contact_section", "gears_section",
-           "load_details_dict", "loads_section", "model_risk_section", "inspection_section",
-           "gear_failures", "MeshStage", "ChecksResult", "BuildResults", "check_warnings",
-           "REPORT_FORMAT_VERSION", "PitchLists", "constant_pitch_section", "assembly_section", "report_dict",
-           "mechanism_section"]
+__all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "MODEL_RISK_NOT_COMPUTED",
+           "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
+           "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
+           "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
+           "BuildResults", "report_dict"]
 
 
 # --------------------------------------------------------------------------- contact
@@ -127,10 +128,53 @@ def gears_section(gears: "GearAnalysis") -> dict[str, Any]:
 
 def gear_failures(gears: "GearAnalysis") -> list[str]:
     """The names of the failed gear checks, then ``phasing`` and ``running clearance`` when
-    those fail: what the build's warning lists."""
+    those fail."""
     failed = [i.name for i in gears.checks.items if not i.passed]
     return (failed + ([] if gears.phasing.consistent else ["phasing"])
             + (["running clearance"] if gears.sweep.any_overlap else []))
+
+
+# --------------------------------------------------------------------------- warnings
+def gear_warnings(gears: "GearAnalysis") -> list[str]:
+    """The build's warning when a gear check, the phasing or the running clearance fails."""
+    return [] if gears.passed else ["end gears: " + ", ".join(gear_failures(gears)) + " failed (report gears)"]
+
+
+def fe_cache_warnings(cache: Any) -> list[str]:
+    """The FE cache's own warnings, and one when the matrices could not be stored
+    (``cache``: a :class:`prs_geom.fe_cache.CachedInfluence`)."""
+    out = list(cache.warnings)
+    if not cache.stored:
+        out.append(f"the finite-element influence matrices could not be stored in {cache.folder} (they were "
+                   f"computed and used; set $PRS_GEOM_CACHE to a writable folder to keep them)")
+    return out
+
+
+def rating_warnings(rating: "RatingResult") -> list[str]:
+    """The build's warnings when the speed or the largest load exceeds its permissible limit."""
+    sec = rating.section
+    lim = sec["limits"]
+    out = []
+    if not lim["speed_ok"]:
+        out.append(f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
+                   f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
+    if not lim["buckling_ok"]:
+        out.append(f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
+                   f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    return out
+
+
+def step_warnings(step: dict[str, Any]) -> list[str]:
+    """A warning for each STEP part that could not be made a valid solid (``step``: the
+    ``step`` section)."""
+    return [f"STEP: the {part} could not be made a valid solid; {part}.step was not written: {row['reason']}"
+            for part, row in step["parts"].items() if not row["valid"]]
+
+
+def mechanism_warnings(m: "MechanismCheck") -> list[str]:
+    """The build's warning naming the failed mechanism checks."""
+    failed = [name for name, ok in m.checks if not ok]
+    return ["mechanism: " + "; ".join(failed) + " failed (report mechanism)"] if failed else []
 
 
 # --------------------------------------------------------------------------- loads
