@@ -1,9 +1,11 @@
 """The report serialiser: report.json's sections from the typed results of the analysis.
 
 The one place where the report's layout and its prose live: each ``*_section`` function
-turns one result object into the dict report.json prints under that section's key, with
-the keys in the order the schema (``prs_geom/exports/schemas/report.schema.json``) lists
-them. The analysis classes compute; they do not know the report.
+turns one result object into the dict report.json prints under that section's key (keys in
+a fixed order; the layout is described by ``prs_geom/exports/schemas/report.schema.json``),
+and :func:`report_dict` assembles the whole report from a build's :class:`BuildResults`.
+The warnings a build prints are worded here too. The analysis classes compute; they do not
+know the report.
 """
 from __future__ import annotations
 
