@@ -293,11 +293,12 @@ def _add_contact_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser
 
 def cmd_contact(args: argparse.Namespace) -> int:
     """Print the contact points and the theoretical screw pitch diameter (or the JSON section); exit 0."""
-    from prs_geom.analysis.contact import contact_report
+    from prs_geom.analysis.contact import analyse_contact
+    from prs_geom.exports.report import contact_section
 
     design = _load(args.design)
     _warn(design)
-    rep = contact_report(design)
+    rep = contact_section(analyse_contact(design))
     if args.json:
         _print_json(rep)
         return EXIT_OK
@@ -378,7 +379,8 @@ def _add_loads_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 def cmd_loads(args: argparse.Namespace) -> int:
     """Print the tooth-load distribution (or the JSON section), with ``--compliance fe`` the model risk; exit 0."""
-    from prs_geom.analysis.loads import loads_report
+    from prs_geom.analysis.loads import load_distribution
+    from prs_geom.exports.report import loads_section
 
     design = _load(args.design)
     _warn(design)
@@ -394,7 +396,7 @@ def cmd_loads(args: argparse.Namespace) -> int:
     progress = args.progress
 
     models = _load_models(design, progress=progress)
-    rep = loads_report(design, model=models.model, progress=progress)
+    rep = loads_section(load_distribution(design, models.model, progress), models.cache_report)
     if args.json:
         _print_json(rep)
         return EXIT_OK
@@ -521,7 +523,7 @@ def cmd_rating(args: argparse.Namespace) -> int:
         res = studies.robust_pitch(design, spectrum, tol, samples=samples, contact=contact, model=model,
                                    execution=studies.Execution(workers=1))
         robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
-    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).report()
+    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).section
     from prs_geom.analysis.rating import limit_warnings
 
     failed = limit_warnings(rep["limits"]["checks"])

@@ -1,9 +1,11 @@
 """The build pipeline and the Python API: design -> analysis -> meshes -> checks -> exports.
 
-Each stage computes its result once and keeps it on the :class:`BuildContext`
-(``ctx.contact``, ``ctx.loads``, ``ctx.meshes``, ...); later stages and the exporters take
-those objects, never the report dict or another stage's files. The report dict only
-collects what is written to ``report.json``.
+Each stage computes its result once and keeps it in the typed
+:class:`~prs_geom.exports.report.BuildResults` of the :class:`BuildContext`
+(``ctx.results.contact``, ``ctx.results.loads``, ``ctx.results.meshes``, ...); later stages
+and the exporters take those objects, never another stage's files. ``report.json`` and
+``report.html`` are rendered from them by the export layer
+(:func:`prs_geom.exports.report.report_dict`, :func:`prs_geom.exports.html.write_html`).
 
 ``build`` runs every stage available on a design and writes all exports plus
 ``report.json`` into an output folder atomically (:mod:`prs_geom.exports.output`); stages
@@ -26,14 +28,17 @@ import numpy as np
 from prs_geom._version import __version__
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.analysis.load_solver import LoadModel
-from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult, analyse_loads, build_model
+from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
-from prs_geom.geometry.frames import carrier_angles, roller_spin
+from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
+                                     check_warnings, constant_pitch_section, fe_cache_warnings, gear_warnings,
+                                     inspection_section, mechanism_warnings, rating_warnings, report_dict,
+                                     step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
-from prs_geom.model.io import PRS_KINDS, design_hash, design_to_dict, dumps_toml, load_design
+from prs_geom.model.io import PRS_KINDS, design_hash, dumps_toml, load_design
 from prs_geom.runtime.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -48,10 +53,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.fe.cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
 
+__all__ = ["REPORT_NAME", "DESIGN_KINDS", "load_any_design", "Analysis", "LoadModels", "load_models", "analyse",
+           "design_pitch", "build_meshes", "BuildOptions", "BuildContext", "stage_design", "stage_pitch",
+           "stage_contact", "stage_gears", "stage_loads", "BUILD_ROBUST_NOTE", "stage_rating", "stage_tolerance",
+           "mesh_checks_job", "stage_meshes", "checks_job", "stage_checks", "stage_manufacturing",
+           "stage_mechanism", "stage_html", "STAGES", "run_stages", "harmonic_stage", "HARMONIC_STAGES",
+           "plan_build", "build"]
+
+#: The file name of the build report in the output folder.
 REPORT_NAME = "report.json"
-#: Version of the report.json layout (``format_version``); the JSON Schema
-#: ``prs_geom/exports/schemas/report.schema.json`` describes it.
-REPORT_FORMAT_VERSION = 1
 #: Design classes by the ``kind`` of a design file: both product lines.
 DESIGN_KINDS: dict[str, type] = {**PRS_KINDS, "harmonic": HarmonicDesign}
 
@@ -85,6 +95,12 @@ class LoadModels:
     compare: dict[str, LoadModel] | None = None
     cache: "CachedInfluence | None" = None
 
+    @property
+    def cache_report(self) -> dict[str, Any] | None:
+        """Where the FE influence matrices came from, as report.json prints it inside
+        ``loads.compliances.details.fe`` (None for the analytic model)."""
+        return None if self.cache is None else self.cache.report()
+
 
 def load_models(design: PRSDesign, contact: ContactResult | None = None,
                 progress: ProgressFn = silent) -> LoadModels:
@@ -104,7 +120,6 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
     fe_contact = analyse_contact(design.constant_pitch()) if design.graded else contact
     cached = cached_influence(design.constant_pitch(), fe_contact, progress=progress)
     fe = fe_load_model(analytic, cached.influence)
-    fe.details["fe"]["cache"] = cached.report()
     return LoadModels(fe, {"analytic": analytic, "fe": fe}, cached)
 
 
@@ -140,14 +155,6 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
 
 
 # --------------------------------------------------------------------------- context
-@dataclass(frozen=True)
-class MeshStage:
-    """The meshes stage: the assembly at the design's chord tolerance and its checks."""
-
-    assembly: "Assembly"
-    checks: list[dict[str, Any]]
-
-
 @dataclass(frozen=True)
 class BuildOptions:
     """What a build writes beyond the default set (``prs-geom build`` flags).
@@ -186,21 +193,16 @@ def _job_label(stage: str) -> str:
 
 @dataclass
 class BuildContext:
-    """What stages share: the design, the temporary output folder, the report being
-    collected and each stage's result (filled in stage order, each computed once)."""
+    """What stages share: the design, the temporary output folder and each stage's typed
+    result (``results``, filled in stage order, each computed once; report.json is rendered
+    from it, :func:`prs_geom.exports.report.report_dict`)."""
 
     design: Any
     out: Path
-    report: dict[str, Any]
     progress: ProgressFn = silent
     options: BuildOptions = field(default_factory=BuildOptions)
-    contact: ContactResult | None = None
-    gears: "GearAnalysis | None" = None
-    loads: LoadsResult | None = None
-    rating: "RatingResult | None" = None
-    tolerance: "ToleranceStudy | None" = None
-    meshes: MeshStage | None = None
-    machining: dict[str, "MachiningSheet"] | None = None
+    #: each stage's result (a new one, with the design's sizing warnings, when not given)
+    results: BuildResults | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
     #: worker processes for the checks, drawings and plots (None: all in this process)
     background: "Background | None" = None
@@ -215,6 +217,12 @@ class BuildContext:
     waited: dict[str, float] = field(default_factory=dict)
     #: the stage running now
     current_stage: str = ""
+
+    def __post_init__(self) -> None:
+        if self.results is None:
+            harmonic = isinstance(self.design, HarmonicDesign)
+            self.results = BuildResults(self.design, kind="harmonic" if harmonic else "prs",
+                                        warnings=[] if harmonic else self.design.sizing_warnings())
 
     def runs(self, stage: str) -> bool:
         """Whether ``stage`` is one of this run's stages."""
@@ -253,32 +261,32 @@ class BuildContext:
         from prs_geom.exports.plots import plot_detached
 
         self.submit(stage, plot_detached, plot, *args)
-        self.report["files"].append(_Pending(stage))
+        self.results.files.append(_Pending(stage))
 
     def collect_plots(self) -> None:
         """Wait for the plots still drawing; put their files and SVG texts in place."""
         files = []
-        for entry in self.report["files"]:
+        for entry in self.results.files:
             if isinstance(entry, _Pending):
                 names, svgs = self.take(entry.job)
                 files += names
                 self.plots_svg.update(svgs)
             else:
                 files.append(entry)
-        self.report["files"] = files
+        self.results.files[:] = files
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(text, encoding="utf-8")
-        self.report["files"].append(name)
+        self.results.files.append(name)
         return path
 
     def add_file(self, name: str) -> Path:
         """Register a file a stage writes itself; returns its path in the output folder."""
         path = self.out / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.report["files"].append(name)
+        self.results.files.append(name)
         return path
 
 
@@ -292,39 +300,29 @@ def stage_design(ctx: BuildContext) -> None:
 def stage_pitch(ctx: BuildContext) -> None:
     """Pitch lists of the three parts (tooth 1 at the loaded end)."""
     d = ctx.design
-    ctx.report["pitch"] = {
-        "screw_mm": list(d.pitch_list("screw")),
-        "roller_mm": list(d.pitch_list("roller")),
-        "nut_mm": list(d.pitch_list("nut")),
-    }
+    ctx.results.pitch = PitchLists(screw_mm=tuple(d.pitch_list("screw")), roller_mm=tuple(d.pitch_list("roller")),
+                                   nut_mm=tuple(d.pitch_list("nut")))
 
 
 def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
-    ctx.contact = analyse_contact(ctx.design)
-    ctx.report["contact"] = ctx.contact.report()
+    ctx.results.contact = analyse_contact(ctx.design)
     if ctx.runs("checks"):
-        ctx.submit("checks", checks_job, ctx.design, ctx.contact, progress=True)
+        ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
     if ctx.runs("manufacturing"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
-        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.contact, ctx.out, _build_date(), __version__,
-                   progress=True)
+        ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
+                   __version__, progress=True)
 
 
 def stage_gears(ctx: BuildContext) -> None:
     """The synchronising end gears: sizing, checks, phasing, running clearance (``gears``)."""
     from prs_geom.analysis.gears import analyse_gears
 
-    ctx.gears = analyse_gears(ctx.design)
-    if ctx.gears is not None:
-        ctx.report["gears"] = rep = ctx.gears.report()
-        if not rep["passed"]:
-            failed = [c["name"] for c in rep["checks"] if not c["passed"]]
-            ctx.report["warnings"].append(
-                "end gears: " + ", ".join(failed + ([] if rep["phasing"]["consistent"] else ["phasing"])
-                                          + (["running clearance"] if rep["running_clearance"]["overlap"] else []))
-                + " failed (report gears)")
+    ctx.results.gears = analyse_gears(ctx.design)
+    if ctx.results.gears is not None:
+        ctx.results.warnings += gear_warnings(ctx.results.gears)
 
 
 def stage_loads(ctx: BuildContext) -> None:
@@ -332,30 +330,20 @@ def stage_loads(ctx: BuildContext) -> None:
     from prs_geom.exports.plots import plot_loads
 
     d = ctx.design
-    models = load_models(d, ctx.contact, ctx.progress)
-    ctx.loads = loads = analyse_loads(d, ctx.contact, progress=ctx.progress, model=models.model,
-                                      compare=models.compare)
-    rep = loads.report()
-    ctx.report["loads"] = rep
+    models = load_models(d, ctx.results.contact, ctx.progress)
+    ctx.results.loads = loads = analyse_loads(d, ctx.results.contact, progress=ctx.progress, model=models.model,
+                                              compare=models.compare)
+    ctx.results.fe_cache = models.cache_report
     if models.cache is not None:
-        ctx.report["warnings"] += list(models.cache.warnings)
-    if models.cache is not None and not models.cache.stored:
-        ctx.report["warnings"].append(f"the finite-element influence matrices could not be stored in "
-                                      f"{models.cache.folder} (they were computed and used; set "
-                                      f"$PRS_GEOM_CACHE to a writable folder to keep them)")
+        ctx.results.warnings += fe_cache_warnings(models.cache)
     if loads.model_risk is not None:
         from prs_geom.exports.plots import plot_model_risk
 
-        ctx.report["model_risk"] = loads.model_risk.report()
         ctx.add_plot("model_risk", plot_model_risk, ctx.out, d.name, loads.model_risk)
-    else:
-        ctx.report["model_risk"] = dict(MODEL_RISK_NOT_COMPUTED)
-    equal = loads.equal_load
-    ctx.report["pitch"]["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
     p = d.thread.pitch_mm
     pr, pn = np.array(loads.designed_roller_mm), np.array(loads.designed_nut_mm)
-    ctx.add_plot("loads", plot_loads, ctx.out, d.name, rep["constant_pitch"], loads.designed_ldc,
-                 loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
+    ctx.add_plot("loads", plot_loads, ctx.out, d.name, constant_pitch_section(loads.distribution),
+                 loads.designed_ldc, loads.designed_off_design, (pr - p) * 1e3, (pn - p) * 1e3, loads.designed_label)
 
 
 #: Why the build has no robust pitch in its rating section.
@@ -371,19 +359,11 @@ def stage_rating(ctx: BuildContext) -> None:
     from prs_geom.analysis.rating import analyse_rating
     from prs_geom.exports.plots import plot_rating
 
-    d, loads = ctx.design, ctx.loads
+    d, loads = ctx.design, ctx.results.loads
     equal = (loads.equal_load.roller_mm, loads.equal_load.nut_mm)
-    ctx.rating = r = analyse_rating(d, ctx.contact, loads.model, equal_lists=equal, robust_note=BUILD_ROBUST_NOTE)
-    ctx.report["rating"] = sec = r.report()
-    lim = sec["limits"]
-    if not lim["speed_ok"]:
-        ctx.report["warnings"].append(
-            f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
-            f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
-    if not lim["buckling_ok"]:
-        ctx.report["warnings"].append(
-            f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
-            f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal,
+                                            robust_note=BUILD_ROBUST_NOTE)
+    ctx.results.warnings += rating_warnings(r)
     ctx.add_plot("rating", plot_rating, ctx.out, d.name, r.curves)
 
 
@@ -400,9 +380,8 @@ def stage_tolerance(ctx: BuildContext) -> None:
     # would be resized under the build's running jobs) and its memory plan (plan_build); the
     # numbers are the same on any number of workers (prs_geom.scaleout)
     workers = ctx.background.workers if ctx.background is not None else 0
-    ctx.tolerance = study = tolerance_study(d, contact=ctx.contact, model=ctx.loads.model,
+    ctx.results.tolerance = study = tolerance_study(d, contact=ctx.results.contact, model=ctx.results.loads.model,
                                             execution=Execution(workers=max(workers, 1), progress=ctx.progress))
-    ctx.report["tolerance"] = study.section
     per_case = [(f"{f * 100:g} % load", study.stats.worst[i]) for i, f in enumerate(study.load_fractions)]
     ctx.add_plot("tolerance", plot_tolerance, ctx.out, d.name, study.worst,
                  per_case if len(per_case) > 1 else [], float(study.deterministic.max()))
@@ -433,23 +412,16 @@ def stage_meshes(ctx: BuildContext) -> None:
 
     d = ctx.design
     # the screw of every export is the theoretical one (the state the analysis certifies)
-    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.contact.screw_profile)
+    asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.results.contact.screw_profile)
     if ctx.runs("checks"):
         ctx.submit("meshes", mesh_checks_job, d, asm.parts, progress=True)
-        ctx.meshes = MeshStage(asm, [])
+        ctx.results.meshes = MeshStage(asm, [])
     else:
         rows = mesh_checks_job(d, asm.parts, ctx.progress)
-        ctx.meshes = MeshStage(asm, rows)
-        ctx.report["checks"]["meshes"] = rows
-    ctx.report["assembly"] = {
-        "parts": list(asm.placed),
-        "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
-        "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
-        "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
-    }
+        ctx.results.meshes = MeshStage(asm, rows)
     nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
-        ctx.report["files"].append(name)
+        ctx.results.files.append(name)
     if ctx.options.step:
         from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids, write_step
 
@@ -463,23 +435,21 @@ def stage_meshes(ctx: BuildContext) -> None:
                 section["files"].append(one["file"])
 
         for part in ("screw", "roller", "nut"):
-            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,), screw_profile=ctx.contact.screw_profile))
+            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,),
+                                    screw_profile=ctx.results.contact.screw_profile))
         # the carrier and the ring (when the design has them) as exact B-reps, a file each
         for part in MECHANISM_STEP_PARTS:
             if f"{part}_lo" in asm.placed:
                 record(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
                                           ctx.out / f"{part}.step"))
-        ctx.report["step"] = section
-        ctx.report["files"] += section["files"]
-        for part, row in section["parts"].items():
-            if not row["valid"]:
-                ctx.report["warnings"].append(f"STEP: the {part} could not be made a valid solid; "
-                                              f"{part}.step was not written: {row['reason']}")
+        ctx.results.step = section
+        ctx.results.files += section["files"]
+        ctx.results.warnings += step_warnings(section)
 
 
-def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> dict[str, Any]:
+def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> ChecksResult:
     """FCL verification of the contacts and the interference check (both screws), with the
-    theoretical screw of the contact stage: ``{"fcl": ..., "interference": ...}``. Needs
+    theoretical screw of the contact stage. Needs
     only the design and the contact result, so a build starts it in a worker right after
     the contact stage."""
     from prs_geom.checks.fcl import verify_contacts
@@ -488,7 +458,7 @@ def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn =
     screw = contact.screw_profile
     fcl_section = verify_contacts(design, screw_profile=screw, designed_gaps=contact.tooth_gaps)
     progress("fcl verification", 1, 1)
-    return {"fcl": fcl_section, "interference": interference_checks(design, screw, progress=progress)}
+    return ChecksResult(fcl=fcl_section, interference=interference_checks(design, screw, progress=progress))
 
 
 def stage_checks(ctx: BuildContext) -> None:
@@ -496,10 +466,9 @@ def stage_checks(ctx: BuildContext) -> None:
     :func:`checks_job` started after the contact stage."""
     if "meshes" in ctx.jobs:
         rows = ctx.take("meshes")
-        ctx.meshes = MeshStage(ctx.meshes.assembly, rows)
-        ctx.report["checks"]["meshes"] = rows
-    ctx.report["checks"].update(ctx.take("checks"))
-    ctx.report["warnings"] += check_warnings(ctx.report)
+        ctx.results.meshes = MeshStage(ctx.results.meshes.assembly, rows)
+    ctx.results.checks = checks = ctx.take("checks")
+    ctx.results.warnings += check_warnings(ctx.results.meshes.checks if ctx.results.meshes else None, checks)
 
 
 def _build_date() -> str:
@@ -520,22 +489,21 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     from prs_geom.exports.dxf import write_dxf
     from prs_geom.exports.sheets import sheet_csv, write_xlsx
 
-    from prs_geom.analysis.inspection import inspection, inspection_report
+    from prs_geom.analysis.inspection import inspection
 
-    insp = inspection_report(inspection(ctx.design, ctx.contact))
-    ctx.report["inspection"] = insp
+    ctx.results.inspection = inspection(ctx.design, ctx.results.contact)
+    insp = inspection_section(ctx.results.inspection)
     from prs_geom.exports.sheets import inspection_csv
 
     ctx.write_text("inspection.csv", inspection_csv(insp))
-    ctx.machining = sheets = machining_sheets(ctx.design, ctx.contact, insp)
-    ctx.report["machining"] = {part: sh.as_dict() for part, sh in sheets.items()}
+    ctx.results.machining = sheets = machining_sheets(ctx.design, ctx.results.contact, insp)
     for part, sh in sheets.items():
         ctx.write_text(f"machining_{part}.csv", sheet_csv(sh))
     write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, _build_date())
     extra = {"theoretical screw pitch dia. (grind to)":
-             f"{ctx.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
+             f"{ctx.results.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
-    ctx.report["files"] += ctx.take("manufacturing")  # the drawings, started after the contact stage
+    ctx.results.files += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
 
 def stage_mechanism(ctx: BuildContext) -> None:
@@ -548,15 +516,13 @@ def stage_mechanism(ctx: BuildContext) -> None:
     from prs_geom.geometry.mechanism import layout
 
     d = ctx.design
-    asm = ctx.meshes.assembly
+    asm = ctx.results.meshes.assembly
     lay = layout(d)
     if lay is not None:
-        from prs_geom.checks.mechanism import mechanism_section
+        from prs_geom.checks.mechanism import check_mechanism
 
-        ctx.report["mechanism"] = sec = mechanism_section(asm, lay, lay.ring.designation)
-        if not sec["passed"]:
-            failed = [c["name"] for c in sec["checks"] if not c["passed"]]
-            ctx.report["warnings"].append("mechanism: " + "; ".join(failed) + " failed (report mechanism)")
+        ctx.results.mechanism = check_mechanism(asm, lay, lay.ring.designation)
+        ctx.results.warnings += mechanism_warnings(ctx.results.mechanism)
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 
     try:
@@ -564,9 +530,9 @@ def stage_mechanism(ctx: BuildContext) -> None:
     except ValueError:
         pass                  # off the standard nut sizing: no ideal kinematics (and no animation)
     else:
-        ctx.report["kinematics"] = kinematics(d, ctx.contact).as_dict()
+        ctx.results.kinematics = kinematics(d, ctx.results.contact)
     rows = parts_list(d, part_volumes(asm))
-    ctx.report["parts_list"] = [r.as_dict() for r in rows]
+    ctx.results.parts_list = rows
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())
 
@@ -577,14 +543,7 @@ def stage_html(ctx: BuildContext) -> None:
 
     ctx.collect_plots()
 
-    write_html(ctx.add_file("report.html"), ctx.design, __version__, ctx.report["warnings"],
-               contact=ctx.contact, loads=ctx.loads, plots_svg=ctx.plots_svg, machining=ctx.machining,
-               rating=ctx.report.get("rating"),
-               tolerance=ctx.report.get("tolerance"),
-               mesh_checks=ctx.meshes.checks if ctx.meshes else None,
-               checks=ctx.report.get("checks"), inspection=ctx.report.get("inspection"), date=_build_date(),
-               mechanism=ctx.report.get("mechanism"), parts_list=ctx.report.get("parts_list"),
-               gears=ctx.report.get("gears"))
+    write_html(ctx.add_file("report.html"), ctx.results, ctx.plots_svg, _build_date(), __version__)
 
 
 #: Stages in run order: (report name, function).
@@ -604,39 +563,6 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
 ]
 
 
-def new_report(design) -> dict[str, Any]:
-    """The report skeleton; its JSON Schema is ``prs_geom/exports/schemas/report.schema.json``."""
-    if isinstance(design, HarmonicDesign):
-        return {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
-                "design": design_to_dict(design), "warnings": [], "harmonic": None, "checks": {},
-                "timings_s": {}, "files": []}
-    return {
-        "format_version": REPORT_FORMAT_VERSION,
-        "prs_geom_version": __version__,
-        "design": design_to_dict(design),
-        "warnings": design.sizing_warnings(),
-        "contact": None,
-        "loads": None,
-        "pitch": None,
-        "checks": {},
-        "machining": None,
-        "timings_s": {},
-        "files": [],
-    }
-
-
-def check_warnings(report: dict[str, Any]) -> list[str]:
-    """Every check whose measured difference exceeds its documented tolerance, as one line
-    each: the ``warnings`` lists of the mesh checks and of the FCL verification."""
-    out = []
-    checks = report.get("checks") or {}
-    for row in checks.get("meshes") or []:
-        out += [f"mesh check ({row['part']}): {w}" for w in row.get("warnings", [])]
-    fcl_check = checks.get("fcl") or {}
-    out += [f"FCL check: {w}" for w in fcl_check.get("warnings", [])]
-    return out
-
-
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None) -> BuildContext:
@@ -653,20 +579,20 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
 
     stages = STAGES if stages is None else stages
     with Background(workers) as background:
-        ctx = BuildContext(design=design, out=out, report=new_report(design), progress=progress,
+        ctx = BuildContext(design=design, out=out, progress=progress,
                            options=options or BuildOptions(), background=background, stages=list(stages))
         for name, fn in stages:
             ctx.current_stage = name
             begin_stage(progress, name)
             t0 = time.perf_counter()
             fn(ctx)
-            ctx.report["timings_s"][name] = time.perf_counter() - t0
+            ctx.results.timings_s[name] = time.perf_counter() - t0
             end_stage(progress, name)
         ctx.current_stage = "end"
         ctx.collect_plots()
         for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
             ctx.take(key)
-    timings = ctx.report["timings_s"]
+    timings = ctx.results.timings_s
     for name in timings:
         timings[name] += ctx.worker_seconds.get(name, 0.0) - ctx.waited.get(name, 0.0)
     return ctx
@@ -681,10 +607,9 @@ def harmonic_stage(ctx: BuildContext) -> None:
     from prs_geom.harmonic.model import harmonic_report
 
     d = ctx.design
-    rep = harmonic_report(d)
-    ctx.report["harmonic"] = rep
+    rep = ctx.results.harmonic = harmonic_report(d)
     ctx.write_text("ratio_table.csv", ratio_table_csv(rep["table"]))
-    ctx.report["files"] += plot_ratio(d, ctx.out)
+    ctx.results.files += plot_ratio(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))
     rows = []
     tol = d.mesh.chord_tolerance_mm
@@ -700,12 +625,16 @@ def harmonic_stage(ctx: BuildContext) -> None:
                      "max_deviation_mm": dev,
                      "warnings": [f"measured deviation {dev:.3g} mm exceeds the chord tolerance {tol:g} mm"]
                      if dev > tol else []})
-    ctx.report["checks"]["meshes"] = rows
-    ctx.report["warnings"] += check_warnings(ctx.report)
+    ctx.results.harmonic_meshes = rows
+    ctx.results.warnings += check_warnings(rows)
     from prs_geom.harmonic.exports import harmonic_outputs
 
     # the placed assembly (wave generator, deformed flexspline), GLB, 3MF and report.html
-    ctx.report["files"] += harmonic_outputs(d, ctx.out, ctx.report, _build_date(), __version__)
+    report = report_dict(ctx.results)
+    ctx.results.files += harmonic_outputs(d, ctx.out, report, _build_date(), __version__)
+    # harmonic_outputs writes its sections into the report it is given (the harmonic line's API)
+    ctx.results.harmonic_assembly = report["assembly"]
+    ctx.results.harmonic_assembly_checks = report["checks"]["assembly"]
 
 
 HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
@@ -791,8 +720,9 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
         with watch, atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,
                              workers=workers)
-            ctx.report["files"].append(REPORT_NAME)
-            (tmp / REPORT_NAME).write_text(json.dumps(ctx.report, indent=2) + "\n", encoding="utf-8")
+            ctx.results.files.append(REPORT_NAME)
+            report = report_dict(ctx.results)
+            (tmp / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     except ResourceLimitError:
         raise
     except OSError as exc:
@@ -803,4 +733,4 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
         if watch.breached:   # a worker killed for the budget, met as a broken pool
             raise watch.error() from None
         raise
-    return ctx.report
+    return report

@@ -7,7 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import optimize
 
-from prs_geom.analysis.contact import (ContactBatch, contact_point, contact_report, euclidean_distance,
+from prs_geom.exports.report import contact_section
+from prs_geom.analysis.contact import (ContactBatch, analyse_contact, contact_point, euclidean_distance,
                               solve_collinear, solve_gap_stationary, theoretical_screw, tooth_contacts)
 from prs_geom.model.design import ContactSettings, Nut, PRSDesign, Roller, Screw, Thread, default_design
 from prs_geom.model.errors import ConvergenceError
@@ -159,7 +160,7 @@ def test_graded_roller_opens_tooth_gaps_by_its_corrections():
     by the roller's cumulative correction (to first order in the normal direction)."""
     pl = tuple(2.0 + 1e-3 for _ in range(19))   # 1 um longer pitch per tooth
     d = PRSDesign(roller=Roller(pitch_list_mm=pl))
-    rep = contact_report(d)
+    rep = contact_section(analyse_contact(d))
     gaps = np.array(rep["tooth_gaps"]["nut"]["upper"]["gap_mm"])
     n = d.thread.engaged_teeth
     # roller tooth j moved up by (j - 1) * 1 um against the nut tooth above: gap shrinks
@@ -169,8 +170,8 @@ def test_graded_roller_opens_tooth_gaps_by_its_corrections():
     np.testing.assert_allclose(gaps[0, 1:], axial[1:] * normal_z, rtol=2e-3)
 
 
-def test_contact_report_fields():
-    rep = contact_report(default_design())
+def test_contact_section_fields():
+    rep = contact_section(analyse_contact(default_design()))
     sr = rep["screw_roller"]
     for key in ("nominal_pitch_diameter_mm", "theoretical_pitch_diameter_mm", "interference_at_nominal_mm",
                 "upper_at_nominal", "lower_at_nominal", "upper_at_theoretical"):

@@ -241,8 +241,8 @@ def test_calibration_identities(calibration, design, contact):
             assert row.ratio_fe_uniform_to_yamamoto[key] == pytest.approx(w / row.equivalent_width_uniform_mm,
                                                                            rel=1e-12)
         # Yamamoto per unit width is the load model's tooth term times its width
-        det = model.details[{"screw": "tooth_screw", "nut": "tooth_nut"}.get(name, f"tooth_{name}")]
-        lam = yamamoto_compliance(beta, det["a_mm"], det["b_mm"], det["c_mm"], design.thread.pitch_mm,
+        det = getattr(model.details, {"screw": "tooth_screw", "nut": "tooth_nut"}.get(name, f"tooth_{name}"))
+        lam = yamamoto_compliance(beta, det.a_mm, det.b_mm, det.c_mm, design.thread.pitch_mm,
                                   pitch_diameter[name], E, NU, design.nut.outer_diameter_mm if name == "nut" else None)
         assert row.yamamoto_per_width == pytest.approx(sum(lam.values()), rel=1e-12)
         assert row.widths_mm["unit"] == 1.0

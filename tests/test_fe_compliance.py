@@ -72,8 +72,8 @@ def test_fe_model_keeps_hertz_and_bodies(small):
     fe = fe_load_model(a, infl)
     for k in ("hertz_nr", "hertz_rs", "body_screw", "body_roller", "body_nut", "n", "z", "sign_screw"):
         assert getattr(fe, k) == getattr(a, k)
-    assert fe.details["compliance"] == "fe" and a.compliance is None
-    assert fe.details["fe"]["teeth"] == 6 and fe.details["fe"]["mesh_level"] == 0
+    assert fe.details.compliance == "fe" and a.compliance is None
+    assert fe.details.fe.teeth == 6 and fe.details.fe.mesh_level == 0
     with pytest.raises(Exception, match="engages 20"):
         fe_load_model(build_model(default_design()), infl)
 
@@ -96,7 +96,7 @@ def test_fe_designed_lists_share_equally_under_the_fe(which, request):
     m = request.getfixturevalue(which)
     d = _fe(_cc(default_design())) if which == "models_cc" else _fe(default_design())
     fe = m.model
-    assert fe.compliance is not None and fe.details["fe"]["mesh_level"] == CONVERGED_LEVEL
+    assert fe.compliance is not None and fe.details.fe.mesh_level == CONVERGED_LEVEL
     pd = design_pitches(d, model=fe)
     r = forward(with_pitch_lists(d, pd), model=fe)
     assert np.abs(r.ldc_nr - 1).max() < 1e-9 and np.abs(r.ldc_rs - 1).max() < 1e-9
@@ -113,7 +113,7 @@ def test_converged_matrices_are_symmetric_and_definite(models_tc):
     for part in models_tc.cache.influence:
         assert part.level == CONVERGED_LEVEL and part.teeth == 20
         assert part.asymmetry < 1e-8, (part.part, part.asymmetry)
-    lo, hi = models_tc.model.details["fe"]["eigenvalues_mm_per_N"]
+    lo, hi = models_tc.model.details.fe.eigenvalues_mm_per_N
     assert 0 < lo < hi
 
 
@@ -291,14 +291,16 @@ def test_build_reports_the_model_risk(fe_build, models_tc):
 
 def test_analytic_build_says_how_to_get_the_model_risk(tmp_path):
     """Without the FE the study is not run (the default build stays fast) and says why."""
-    from prs_geom.pipeline import BuildContext, new_report, stage_contact, stage_loads, stage_pitch
+    from prs_geom.exports.report import report_dict
+    from prs_geom.pipeline import BuildContext, stage_contact, stage_loads, stage_pitch
 
     d = default_design()
-    ctx = BuildContext(design=d, out=tmp_path, report=new_report(d), stages=[("loads", stage_loads)])
+    ctx = BuildContext(design=d, out=tmp_path, stages=[("loads", stage_loads)])
     for fn in (stage_pitch, stage_contact, stage_loads):
         fn(ctx)
     ctx.collect_plots()
-    assert ctx.report["model_risk"]["computed"] is False
-    assert "--compliance fe" in ctx.report["model_risk"]["note"]
-    assert ctx.report["loads"]["compliances"]["model"] == "analytic"
+    report = report_dict(ctx.results)
+    assert report["model_risk"]["computed"] is False
+    assert "--compliance fe" in report["model_risk"]["note"]
+    assert report["loads"]["compliances"]["model"] == "analytic"
     assert not (tmp_path / "model_risk_ldc.svg").exists()

@@ -26,9 +26,10 @@ from dataclasses import replace
 import pytest
 
 from prs_geom.analysis.contact import analyse_contact
+from prs_geom.exports.report import inspection_section
 from prs_geom.analysis.inspection import (GrooveAtPitchLine, PartInspection, best_gauge, classical_seat,
                                           groove_at_pitch_line, helical_flanks, inspect_part, inspection,
-                                          inspection_report, place_gauge)
+                                          place_gauge)
 from prs_geom.geometry.profiles import ThreadProfiles
 from prs_geom.model.design import Nut, PRSDesign, Screw, Thread, default_design
 
@@ -207,7 +208,7 @@ def test_temperature_coefficients(default_result):
 
 def test_report_has_units_in_its_keys(default_result):
     _, _, result = default_result
-    rep = inspection_report(result)
+    rep = inspection_section(result)
     for part, values in rep.items():
         for key in values:
             assert key in ("part", "gauge", "method", "check_passed") or key.endswith(

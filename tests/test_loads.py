@@ -12,8 +12,9 @@ from cli_helpers import run
 from prs_geom.model.design import Loading, default_design
 from prs_geom.model.io import load_design
 from prs_geom.model.errors import ConvergenceError
+from prs_geom.exports.report import loads_section
 from prs_geom.analysis.loads import (build_model, closed_form_equal_load, design_pitches, forward,
-                            gap_terms, hertz_constant, loads_report, solve_loads, with_pitch_lists,
+                            gap_terms, hertz_constant, load_distribution, solve_loads, with_pitch_lists,
                             yamamoto_compliance)
 from strategies import standard_designs
 
@@ -51,7 +52,7 @@ def test_closed_form_magnitudes_of_domain_check():
 
 
 def test_constant_pitch_worst_tooth_is_clearly_above_one():
-    rep = loads_report(default_design())
+    rep = loads_section(load_distribution(default_design()))
     assert rep["max_ldc"] > 1.2
     assert rep["ldc_roller_screw"][0] == pytest.approx(rep["max_ldc"])
     assert sum(rep["ldc_nut_roller"]) == pytest.approx(20.0, rel=1e-12)
@@ -610,14 +611,14 @@ def test_sensitivity_is_one_batched_solve_in_chunks():
         assert got[f"worst_pitch_index_{part}"] == worst[part][1]
 
 
-def test_loads_report_reports_progress_per_substep():
+def test_load_distribution_reports_progress_per_substep():
     d = default_design()
     calls = []
-    rep = loads_report(d, progress=lambda *a: calls.append(a))
+    rep = loads_section(load_distribution(d, progress=lambda *a: calls.append(a)))
     total = 4 + 4 + sensitivity_chunks(d)
     assert calls == [("loads", i, total) for i in range(1, total + 1)]
     assert rep["max_ldc"] == pytest.approx(max(rep["ldc_roller_screw"] + rep["ldc_nut_roller"]))
-    assert loads_report(d) == rep
+    assert loads_section(load_distribution(d)) == rep
     off = off_design(d, (0.5, 2.0))
     r = forward(d, 2.0 * d.loading.axial_load_n)
     assert off[1]["ldc_roller_screw"] == pytest.approx(r.ldc_rs.tolist(), rel=1e-12)

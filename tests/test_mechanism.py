@@ -9,7 +9,8 @@ import pytest
 
 from prs_geom.analysis.contact import theoretical_screw
 from prs_geom.checks.interference import check_assembly
-from prs_geom.checks.mechanism import mechanism_section
+from prs_geom.checks.mechanism import check_mechanism
+from prs_geom.exports.report import mechanism_section
 from prs_geom.exports.bom import read_parts_list_csv, read_parts_list_xlsx
 from prs_geom.geometry.frames import screw_z_range, thread_length
 from prs_geom.geometry.mechanism import layout
@@ -87,7 +88,7 @@ def test_no_pair_of_parts_interferes(placed):
 
 def test_journal_clearances_lie_in_the_fit_range(placed):
     d, lay, asm = placed
-    sec = mechanism_section(asm, lay, lay.ring.designation)
+    sec = mechanism_section(check_mechanism(asm, lay, lay.ring.designation))
     rows = sec["journal_clearances"]
     assert len(rows) == 2 * d.roller.count
     lo, hi = 0.5 * lay.journal_fit.min_clearance_mm, 0.5 * lay.journal_fit.max_clearance_mm
@@ -280,7 +281,7 @@ def test_carrier_guided_in_the_nut_bore():
     assert 2 * lay.carrier_outer_radius_mm == pytest.approx(41.0 - 0.0375)
     assert 2 * lay.nut_bore_radius_mm == pytest.approx(41.0 + 0.0195)
     asm = build_assembly(d, tol=TOL, screw_profile=theoretical_screw(d).profile)
-    sec = mechanism_section(asm, lay, lay.ring.designation)
+    sec = mechanism_section(check_mechanism(asm, lay, lay.ring.designation))
     assert [c["name"] for c in sec["checks"]][:2] == ["fit: roller journal in carrier bore", "fit: carrier in nut bore"]
     assert sec["passed"]
     assert check_assembly(asm, TOL)["found"] is False

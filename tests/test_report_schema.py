@@ -15,6 +15,7 @@ import pytest
 
 from prs_geom import pipeline
 from prs_geom.model.design import PRSDesign
+from prs_geom.exports.report import REPORT_FORMAT_VERSION
 from prs_geom.exports.report_schema import load_schema, validate_report
 from prs_geom.pipeline import load_any_design as load_design
 
@@ -66,7 +67,7 @@ def test_schema_is_valid_draft_2020_12():
     assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
     assert schema["$id"].startswith("urn:prs-geom:report:")
     assert schema["title"] and schema["description"]
-    assert schema["$defs"]["prs_report"]["properties"]["format_version"]["const"] == pipeline.REPORT_FORMAT_VERSION
+    assert schema["$defs"]["prs_report"]["properties"]["format_version"]["const"] == REPORT_FORMAT_VERSION
 
 
 def test_load_schema_returns_a_private_copy():

@@ -57,7 +57,7 @@ from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 __all__ = ["PartFlanks", "ContactBatch", "NewtonResult", "solve_collinear", "solve_gap_stationary",
            "euclidean_distance", "part_flanks", "tooth_contacts", "ContactPoint", "contact_point",
            "TheoreticalScrew", "corrected_screw_profile", "theoretical_screw", "ANGLE_CONVENTIONS", "tooth_gaps",
-           "ContactResult", "analyse_contact", "contact_report"]
+           "ContactResult", "analyse_contact"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -477,18 +477,6 @@ def theoretical_screw(design: PRSDesign, max_iter: int = 30) -> TheoreticalScrew
                            f"{target} mm within {prec} mm in {max_iter} steps")
 
 
-# --------------------------------------------------------------------------- report
-ANGLE_CONVENTIONS = (
-    "part_angle_deg: angle of the contact on the screw or nut from the line of centres "
-    "(screw axis -> roller axis), positive counter-clockwise seen from +z; "
-    "roller_angle_deg: angle in the roller frame from the direction pointing away from the "
-    "screw axis (screw-side contacts near +-180, nut-side near 0); left-hand designs are "
-    "mirror images (angles change sign). upper = roller upper flank (facing +z) against the "
-    "lower flank of the screw/nut tooth above it; lower = the mirror contact. Points and "
-    "normals in the screw frame (mm); normals point to +z."
-)
-
-
 def tooth_gaps(design: PRSDesign, screw_profile: ThreadProfile | None = None) -> dict[str, Any]:
     """Unloaded gap at every tooth of every roller (signed minimum Euclidean distance
     between the two analytic flank surfaces, mm; negative = interference at the nominal
@@ -536,27 +524,6 @@ class ContactResult:
         """The screw profile at the theoretical pitch diameter (nominal lead angle)."""
         return self.theoretical.profile
 
-    def report(self) -> dict[str, Any]:
-        """The ``contact`` section of report.json."""
-        theo, d = self.theoretical, self.design
-        return {
-            "conventions": ANGLE_CONVENTIONS,
-            "screw_roller": {
-                **{k: v.as_dict() for k, v in self.screw_roller.items()},
-                "nominal_pitch_diameter_mm": theo.nominal_pitch_diameter_mm,
-                "theoretical_pitch_diameter_mm": theo.theoretical_pitch_diameter_mm,
-                "diameter_correction_mm": theo.nominal_pitch_diameter_mm - theo.theoretical_pitch_diameter_mm,
-                "interference_at_nominal_mm": max(0.0, -theo.gap_at_nominal_mm),
-                "interference_at_nominal_normal_mm": self.interference_at_nominal_normal_mm,
-                "clearance_mm": d.contact.clearance_mm,
-                "gap_at_theoretical_mm": theo.gap_at_theoretical_mm,
-                "diameter_iterations": theo.iterations,
-            },
-            "roller_nut": {k: v.as_dict() for k, v in self.roller_nut.items()},
-            "tooth_gaps": self.tooth_gaps,
-        }
-
-
 def analyse_contact(design: PRSDesign) -> ContactResult:
     """Contacts, the theoretical screw pitch diameter and (graded designs) the per-tooth
     gaps: the contact stage."""
@@ -571,8 +538,3 @@ def analyse_contact(design: PRSDesign) -> ContactResult:
     rn = {fl: contact_point(design, "nut", fl) for fl in ("upper", "lower")}
     return ContactResult(design, theo, sr, rn, max(0.0, -float(eu[0])),
                          tooth_gaps(design, theo.profile) if design.graded else None)
-
-
-def contact_report(design: PRSDesign) -> dict[str, Any]:
-    """The ``contact`` section of report.json (:func:`analyse_contact` then its report)."""
-    return analyse_contact(design).report()

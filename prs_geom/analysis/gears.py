@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -66,48 +65,6 @@ class GearAnalysis:
     @property
     def passed(self) -> bool:
         return self.checks.passed and self.phasing.consistent and not self.sweep.any_overlap
-
-    def report(self) -> dict[str, Any]:
-        """The report's ``gears`` section."""
-        def gear(g: SpurGear, internal: bool) -> dict[str, Any]:
-            k = g.recommended_span_teeth()
-            pin = g.ideal_pin_diameter()
-            return {"teeth": g.teeth, "module_mm": g.module_mm, "pressure_angle_deg": g.pressure_angle_deg,
-                    "profile_shift": g.profile_shift, "addendum_coefficient": g.addendum_coefficient,
-                    "dedendum_coefficient": g.dedendum_coefficient,
-                    "pitch_diameter_mm": 2.0 * g.pitch_radius_mm, "base_diameter_mm": 2.0 * g.base_radius_mm,
-                    "tip_diameter_mm": 2.0 * g.tip_radius_mm, "root_diameter_mm": 2.0 * g.root_radius_mm,
-                    "tooth_thickness_mm": g.tooth_thickness_mm, "backlash_thinning_mm": g.backlash_mm,
-                    "span_teeth": k, "span_measurement_mm": g.span_measurement(k),
-                    "pin_diameter_mm": pin,
-                    ("between_pins_mm" if internal else "over_pins_mm"): g.over_pins(pin)}
-
-        c = self.checks
-        return {
-            "rule": self.pair.rule,
-            "roller_gear": gear(self.roller_gear, False),
-            "ring_gear": gear(self.ring_gear, True),
-            "face_width_mm": self.face_width_mm,
-            "centre_distance_mm": self.pair.centre_distance_mm,
-            "ratio": self.pair.ratio,
-            "working_pressure_angle_deg": c.working_pressure_angle_deg,
-            "contact_ratio": c.contact_ratio,
-            "backlash_circumferential_mm": c.backlash_circumferential_mm,
-            "backlash_normal_mm": c.backlash_normal_mm,
-            "checks": [{"name": i.name, "passed": i.passed, "value": i.value, "limit": i.limit, "unit": i.unit,
-                        "rule": i.rule} for i in c.items],
-            "phasing": {"consistent": self.phasing.consistent, "divisible": self.divisible,
-                        "roller_gear_offset_deg": math.degrees(self.phasing.offset_rad),
-                        "max_residual_deg": float(np.degrees(np.abs(self.phasing.residuals_rad).max(initial=0.0))),
-                        "rule": "one roller gear offset meshes every roller when z divides z_ring - n_s z_g; "
-                                "ring gear tooth 0 on the nut's +x axis at both ends"},
-            "running_clearance": {"min_mm": self.sweep.min_clearance_mm, "overlap": self.sweep.any_overlap,
-                                  "steps": int(len(self.sweep.advance_rad)),
-                                  "chord_tolerance_mm": SWEEP_CHORD_MM,
-                                  "what": "least 2D distance of every roller gear to the ring gear over one "
-                                          "ring pitch of carrier travel"},
-            "passed": self.passed,
-        }
 
 
 def analyse_gears(design: PRSDesign) -> GearAnalysis | None:

@@ -83,7 +83,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 from scipy import optimize
@@ -479,14 +479,6 @@ class PartInspection:
         """True when the numerical placement agrees with the closed form within 0.1 um."""
         return self.numerical_check_um <= CHECK_TOLERANCE_UM and self.contact_radius_check_um <= 1.0
 
-    def report(self) -> dict[str, Any]:
-        """The values with units in the key names."""
-        out = dict(self.__dict__)
-        out["reference_temperature_degc"] = 20.0
-        out["check_passed"] = self.check_passed
-        return out
-
-
 def _method_text(part: str, gauge: str, starts: int) -> str:
     if gauge == "wire":
         opposite = ("axially offset p/2 (odd start count)" if starts % 2 else
@@ -581,11 +573,6 @@ def inspection(design: PRSDesign, contact: ContactResult | None = None) -> dict[
     return {part: inspect_part(design, made[part]) for part in PARTS}
 
 
-def inspection_report(result: dict[str, PartInspection]) -> dict[str, dict[str, Any]]:
-    """``report()`` of every part."""
-    return {part: r.report() for part, r in result.items()}
-
-
 __all__ = ["GAUGES", "GaugeSeat", "GrooveAtPitchLine", "HelicalFlanks", "NumericalSeat", "PartInspection",
            "best_gauge", "classical_best_radius", "classical_seat", "groove_at_pitch_line", "helical_flanks",
-           "inspect_part", "inspection", "inspection_report", "place_gauge"]
+           "inspect_part", "inspection", "place_gauge"]

@@ -105,6 +105,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import linalg
 
+from prs_geom.analysis.load_details import LoadModelDetails
 from prs_geom.model.errors import ConvergenceError, DesignError
 from prs_geom.runtime.progress import ProgressFn
 
@@ -143,7 +144,8 @@ class LoadModel:
     body_screw: float               # p / (E A) (mm / N)
     body_roller: float
     body_nut: float
-    details: dict[str, Any] = field(default_factory=dict, compare=False)
+    #: what the compliances were computed from (None for a model made by hand)
+    details: LoadModelDetails | None = field(default=None, compare=False)
     compliance: NDArray | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:

@@ -72,6 +72,7 @@ from numpy.typing import NDArray
 
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.analysis.hertz import hertz_contact
+from prs_geom.analysis.load_details import HertzContact, LoadModelDetails, SectionAreas, ToothTerms
 from prs_geom.analysis.load_solver import (MEMORY_MB, LoadBatch, LoadModel, LoadResult, RollerLoadResult,
                                            block_compliance, chunk_size, iteration_bound, solve_loads, solve_loads_batch,
                                            solve_loads_rollers)
@@ -84,7 +85,8 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "iteration_bound", "solve_loads", "solve_loads_batch", "solve_loads_rollers", "build_model",
            "forward", "gap_terms", "gap_terms_rollers", "pitch_gaps", "axial_stiffness", "design_pitches",
            "closed_form_equal_load", "with_pitch_lists", "off_design", "pitch_error_sensitivity",
-           "loads_report", "analyse_loads", "LoadsResult", "PitchDesign", "hertz_constant",
+           "LoadDistribution", "LOAD_FRACTIONS", "load_distribution", "analyse_loads", "LoadsResult", "PitchDesign",
+           "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
            "check_load_scale", "MODEL_RISK_NOT_COMPUTED", "design_pitch"]
@@ -195,33 +197,95 @@ def check_load_scale(design: PRSDesign, model: LoadModel | None = None, load_n: 
     raise DesignError(field, shown, why)
 
 
-def _tooth_compliance(design: PRSDesign, part: str, r_c: float, width: float,
-                      profile: ThreadProfile) -> tuple[float, dict[str, float]]:
-    """Yamamoto compliance (mm/N, axial) of the ``part`` tooth loaded at radius ``r_c`` (mm)
-    over circumferential ``width`` (mm), and its terms: tooth thickness b at the contact
-    radius, root distance c, root thickness a (mm), the width and each term per width."""
-    beta, p, mats = design.thread.beta, design.thread.pitch_mm, design.materials
-    b = 2.0 * float(profile.tooth_half_width(r_c))
-    c = abs(r_c - profile.root_radius)
+def _hertz_contacts(design: PRSDesign, contact: ContactResult) -> tuple[HertzContact, HertzContact]:
+    """The Hertz constants of the screw-roller and the roller-nut contact (in that order):
+    the roller's flank arc against the straight flank of the screw or nut at the contact
+    points of the contact stage (theoretical screw)."""
+    mats = design.materials
+    sin_beta = math.sin(design.thread.beta)
+    arc_radius = design.roller.arc_radius_mm
+    c_rs = contact.screw_roller["upper_at_theoretical"]
+    c_nr = contact.roller_nut["lower"]
+
+    def compliance_sum(part: str) -> float:
+        other = getattr(mats, part)
+        return (1 - mats.roller.poisson_ratio ** 2) / mats.roller.youngs_modulus_mpa + \
+            (1 - other.poisson_ratio ** 2) / other.youngs_modulus_mpa
+
+    def pair(part_curvature: float, eta: float, normal_z: float) -> HertzContact:
+        c_normal, constants = hertz_constant((1 / arc_radius, 1 / arc_radius, 0.0, part_curvature), eta)
+        return HertzContact(**constants, normal_axial_component=normal_z, C_normal=c_normal)
+
+    return (pair(sin_beta / c_rs.part_radius_mm, compliance_sum("screw"), abs(c_rs.normal[2])),
+            pair(-sin_beta / c_nr.part_radius_mm, compliance_sum("nut"), abs(c_nr.normal[2])))
+
+
+def _tooth_width(design: PRSDesign, part: str, hertz: HertzContact, pitch_diameter: float) -> float:
+    """The circumferential width (mm) the tooth terms of ``part`` act over, by the design's
+    ``loads.tooth_width`` convention; ``hertz``: the contact the tooth carries."""
+    convention = design.loads.tooth_width
+    if convention == "unit":
+        return 1.0
+    if convention == "ring":
+        return math.pi * pitch_diameter
+    if convention == "contact-ellipse":
+        z = design.roller.count
+        mean_tooth_load = design.loading.axial_load_n / (design.thread.engaged_teeth * z)     # axial, N
+        return 2.0 * hertz.circumferential_semi_axis_per_cbrt_N_mm * \
+            (mean_tooth_load / hertz.normal_axial_component) ** (1.0 / 3.0)
+    # circumference-share: the contacts of one tooth ring share its circumference
+    return math.pi * pitch_diameter / (1 if part == "roller" else design.roller.count)
+
+
+def _tooth_terms(design: PRSDesign, part: str, contact_radius: float, width: float,
+                 profile) -> tuple[float, ToothTerms]:
+    """Yamamoto's compliance of the tooth of ``part`` (``profile``) loaded at
+    ``contact_radius`` (mm), per ``width`` (mm): the axial deflection per N (mm/N) and its
+    terms. A contact off the tooth raises :class:`DesignError` on ``roller.arc_radius_mm``."""
+    beta = design.thread.beta
+    p = design.thread.pitch_mm
+    b = 2.0 * float(profile.tooth_half_width(contact_radius))
+    c = abs(contact_radius - profile.root_radius)
     a = b + 2.0 * c * math.tan(beta)
     if not 0.0 < b <= a < 2.0 * p:
-        # Yamamoto's terms take log(a / b) and log(P - a / 2), out of their domain when the
-        # contact lies off the tooth: the roller's flank arc touches a straight flank at a
-        # roller radius of about r_T sin(beta), so the arc radius moves it
+        # Yamamoto's terms take log(a / b) and log(P - a / 2). It fails when the contact lies off
+        # the tooth: the roller's flank arc touches a straight flank at a roller radius of about
+        # r_T sin(beta), so the arc radius moves it
         r_t = design.roller.arc_radius_mm
         raise DesignError("roller.arc_radius_mm", r_t,
-                          f"the {part} tooth at the contact (radius {r_c:.4g} mm) has a thickness b = {b:.4g} mm "
-                          f"and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a < 2 p = "
-                          f"{2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a roller "
-                          f"radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
+                          f"the {part} tooth at the contact (radius {contact_radius:.4g} mm) has a thickness b = "
+                          f"{b:.4g} mm and a root thickness a = {a:.4g} mm; the tooth compliance needs 0 < b <= a "
+                          f"< 2 p = {2.0 * p:g} mm, so the contact lies off the tooth (the flank arc touches at a "
+                          f"roller radius of about r_T sin(beta) = {r_t * math.sin(beta):.4g} mm): choose "
                           f"roller.arc_radius_mm nearer r_r / sin(beta) = "
                           f"{0.5 * design.roller.pitch_diameter_mm / math.sin(beta):.4g} mm")
-    mat = getattr(mats, part)
+    mat = getattr(design.materials, part)
     terms = yamamoto_compliance(beta, a, b, c, p, 2 * profile.pitch_radius, mat.youngs_modulus_mpa,
-                                mat.poisson_ratio,
-                                design.nut.outer_diameter_mm if part == "nut" else None)
-    return sum(terms.values()) / width, {"a_mm": a, "b_mm": b, "c_mm": c, "width_mm": width,
-                                         **{k: v / width for k, v in terms.items()}}
+                                mat.poisson_ratio, design.nut.outer_diameter_mm if part == "nut" else None)
+    return sum(terms.values()) / width, ToothTerms(a_mm=a, b_mm=b, c_mm=c, width_mm=width,
+                                                   **{k: v / width for k, v in terms.items()})
+
+
+def _analytic_teeth(design: PRSDesign, contact: ContactResult, hertz_rs: HertzContact,
+                    hertz_nr: HertzContact) -> dict[str, tuple[float, ToothTerms]]:
+    """Compliance (mm/N) and terms of the four loaded teeth, by the name of their
+    :class:`LoadModelDetails` field: the screw's, the roller's at the screw and at the nut
+    side, the nut's."""
+    prof = ThreadProfiles.from_design(design)
+    screw_profile = contact.theoretical.profile
+    c_rs = contact.screw_roller["upper_at_theoretical"]
+    c_nr = contact.roller_nut["lower"]
+    d_r = design.roller.pitch_diameter_mm
+    return {
+        "tooth_screw": _tooth_terms(design, "screw", c_rs.part_radius_mm, _tooth_width(
+            design, "screw", hertz_rs, 2 * screw_profile.pitch_radius), screw_profile),
+        "tooth_roller_screw_side": _tooth_terms(design, "roller", c_rs.roller_radius_mm, _tooth_width(
+            design, "roller", hertz_rs, d_r), prof.roller),
+        "tooth_roller_nut_side": _tooth_terms(design, "roller", c_nr.roller_radius_mm, _tooth_width(
+            design, "roller", hertz_nr, d_r), prof.roller),
+        "tooth_nut": _tooth_terms(design, "nut", c_nr.part_radius_mm, _tooth_width(
+            design, "nut", hertz_nr, design.nut.pitch_diameter_mm), prof.nut),
+    }
 
 
 def build_model(design: PRSDesign, contact: ContactResult | None = None) -> LoadModel:
@@ -229,67 +293,31 @@ def build_model(design: PRSDesign, contact: ContactResult | None = None) -> Load
     when ``contact`` is not given). The design load must suit the model
     (:func:`check_load_scale`, a :class:`DesignError` on ``loading.axial_load_n`` if not)."""
     contact = contact if contact is not None else analyse_contact(design)
-    prof = ThreadProfiles.from_design(design)
-    mats = design.materials
-    beta = design.thread.beta
+    hertz_rs, hertz_nr = _hertz_contacts(design, contact)
+    teeth = _analytic_teeth(design, contact, hertz_rs, hertz_nr)
+    details = LoadModelDetails(tooth_width=design.loads.tooth_width, hertz_rs=hertz_rs, hertz_nr=hertz_nr,
+                               **{name: terms for name, (_, terms) in teeth.items()},
+                               section_areas_mm2=SectionAreas(**_section_areas(design)))
     p = design.thread.pitch_mm
-    z = design.roller.count
-    theo = contact.theoretical
-    c_rs = contact.screw_roller["upper_at_theoretical"]
-    c_nr = contact.roller_nut["lower"]
-    rt = design.roller.arc_radius_mm
-    sb = math.sin(beta)
-    eta_rs = (1 - mats.roller.poisson_ratio ** 2) / mats.roller.youngs_modulus_mpa + \
-        (1 - mats.screw.poisson_ratio ** 2) / mats.screw.youngs_modulus_mpa
-    eta_nr = (1 - mats.roller.poisson_ratio ** 2) / mats.roller.youngs_modulus_mpa + \
-        (1 - mats.nut.poisson_ratio ** 2) / mats.nut.youngs_modulus_mpa
-    C_rs, h_rs = hertz_constant((1 / rt, 1 / rt, 0.0, sb / c_rs.part_radius_mm), eta_rs)
-    C_nr, h_nr = hertz_constant((1 / rt, 1 / rt, 0.0, -sb / c_nr.part_radius_mm), eta_nr)
-    nz_rs, nz_nr = abs(c_rs.normal[2]), abs(c_nr.normal[2])
-    hertz_rs = C_rs * nz_rs ** (-5.0 / 3.0)
-    hertz_nr = C_nr * nz_nr ** (-5.0 / 3.0)
+    mats = design.materials
+    areas = details.section_areas_mm2
 
-    convention = design.loads.tooth_width
-    q_mean = design.loading.axial_load_n / (design.thread.engaged_teeth * z)     # axial, N
+    def hertz(h: HertzContact) -> float:
+        return h.C_normal * h.normal_axial_component ** (-5.0 / 3.0)
 
-    def width(part: str, side: str, pitch_diameter: float) -> float:
-        """The circumferential width (mm) the tooth terms of ``part`` at ``side`` act over."""
-        if convention == "unit":
-            return 1.0
-        if convention == "ring":
-            return math.pi * pitch_diameter
-        if convention == "contact-ellipse":
-            h, nz = (h_rs, nz_rs) if side == "rs" else (h_nr, nz_nr)
-            return 2.0 * h["circumferential_semi_axis_per_cbrt_N_mm"] * (q_mean / nz) ** (1.0 / 3.0)
-        # circumference-share: the contacts of one tooth ring share its circumference
-        return math.pi * pitch_diameter / (1 if part == "roller" else z)
-
-    d_r = design.roller.pitch_diameter_mm
-    t_s, d_s = _tooth_compliance(design, "screw", c_rs.part_radius_mm,
-                                 width("screw", "rs", 2 * theo.profile.pitch_radius), theo.profile)
-    t_rs_r, d_rs_r = _tooth_compliance(design, "roller", c_rs.roller_radius_mm, width("roller", "rs", d_r),
-                                       prof.roller)
-    t_nr_r, d_nr_r = _tooth_compliance(design, "roller", c_nr.roller_radius_mm, width("roller", "nr", d_r),
-                                       prof.roller)
-    t_n, d_n = _tooth_compliance(design, "nut", c_nr.part_radius_mm,
-                                 width("nut", "nr", design.nut.pitch_diameter_mm), prof.nut)
-    A = _section_areas(design)
-    inst = design.loading.installation
     model = LoadModel(
-        n=design.thread.engaged_teeth, z=z, pitch=p,
-        sign_screw=1 if inst == "tension-compression" else -1,
-        hertz_nr=hertz_nr, hertz_rs=hertz_rs, tooth_nr=t_nr_r + t_n, tooth_rs=t_rs_r + t_s,
-        body_screw=p / (mats.screw.youngs_modulus_mpa * A["screw"]),
-        body_roller=p / (mats.roller.youngs_modulus_mpa * A["roller"]),
-        body_nut=p / (mats.nut.youngs_modulus_mpa * A["nut"]),
-        details={"tooth_width": convention, "hertz_rs": {**h_rs, "normal_axial_component": nz_rs, "C_normal": C_rs},
-                 "hertz_nr": {**h_nr, "normal_axial_component": nz_nr, "C_normal": C_nr},
-                 "tooth_screw": d_s, "tooth_roller_screw_side": d_rs_r,
-                 "tooth_roller_nut_side": d_nr_r, "tooth_nut": d_n, "section_areas_mm2": A},
+        n=design.thread.engaged_teeth, z=design.roller.count, pitch=p,
+        sign_screw=1 if design.loading.installation == "tension-compression" else -1,
+        hertz_nr=hertz(details.hertz_nr), hertz_rs=hertz(details.hertz_rs),
+        tooth_nr=teeth["tooth_roller_nut_side"][0] + teeth["tooth_nut"][0],
+        tooth_rs=teeth["tooth_roller_screw_side"][0] + teeth["tooth_screw"][0],
+        body_screw=p / (mats.screw.youngs_modulus_mpa * areas.screw),
+        body_roller=p / (mats.roller.youngs_modulus_mpa * areas.roller),
+        body_nut=p / (mats.nut.youngs_modulus_mpa * areas.nut),
+        details=details,
     )
     check_load_scale(design, model)
     return model
-
 
 
 def gap_terms(design: PRSDesign, roller: Sequence[float] | None = None,
@@ -506,21 +534,62 @@ def pitch_error_sensitivity(design: PRSDesign, error_mm: float = 1e-3, model: Lo
             **{f"worst_pitch_index_{k_}": v[1] for k_, v in worst.items()}}
 
 
-def loads_report(design: PRSDesign, model: LoadModel | None = None,
-                 progress: ProgressFn | None = None) -> dict[str, Any]:
-    """The ``loads`` section of report.json.
+@dataclass(frozen=True)
+class LoadDistribution:
+    """The load distribution of a design under one load model: what report.json's ``loads``
+    section prints (:func:`prs_geom.exports.report.loads_section`).
+
+    Attributes
+    ----------
+    design_load_n : float
+        The design load (N).
+    installation : str
+        ``loading.installation`` of the design.
+    result : LoadResult
+        Tooth loads at the design load with the design's pitch lists.
+    constant_pitch : LoadResult
+        The same with constant pitch.
+    linear : LoadResult
+        The linear model, linearised at the mean tooth load of ``result``.
+    stiffness : dict
+        :func:`axial_stiffness` of the design.
+    off_design : list of dict
+        :func:`off_design` rows at :data:`LOAD_FRACTIONS`.
+    sensitivity : dict
+        :func:`pitch_error_sensitivity` of the design.
+    model : LoadModel
+        The load model of every solve.
+    """
+
+    design_load_n: float
+    installation: str
+    result: LoadResult
+    constant_pitch: LoadResult
+    linear: LoadResult
+    stiffness: dict[str, Any]
+    off_design: list[dict[str, Any]]
+    sensitivity: dict[str, Any]
+    model: LoadModel
+
+    @property
+    def max_ldc(self) -> float:
+        """The worst coefficient of both sides at the design load."""
+        return float(max(self.result.ldc_nr.max(), self.result.ldc_rs.max()))
+
+
+#: Loads of the off-design rows of :class:`LoadDistribution`, as fractions of the design load.
+LOAD_FRACTIONS = (0.25, 0.5, 1.0, 1.5)
+
+
+def load_distribution(design: PRSDesign, model: LoadModel | None = None,
+                      progress: ProgressFn | None = None) -> LoadDistribution:
+    """The load distribution of ``design`` under ``model`` (default :func:`build_model`).
 
     ``progress("loads", done, total)`` is called after every sub-step: base solve, constant
     pitch, linear model, stiffness, each off-design load and each chunk of the sensitivity
     study."""
-    return _loads_section(design, model or build_model(design), progress)[0]
-
-
-def _loads_section(design: PRSDesign, model: LoadModel,
-                   progress: ProgressFn | None) -> tuple[dict[str, Any], LoadResult]:
-    """:func:`loads_report` and the tooth loads at the design load it is built on."""
-    fractions = (0.25, 0.5, 1.0, 1.5)
-    total = 4 + len(fractions) + sensitivity_chunks(design, model)
+    model = model or build_model(design)
+    total = 4 + len(LOAD_FRACTIONS) + sensitivity_chunks(design, model)
     count = [0]
 
     def tick(*_: Any) -> None:
@@ -530,39 +599,19 @@ def _loads_section(design: PRSDesign, model: LoadModel,
 
     r = forward(design, model=model)
     tick()
-    const = design.constant_pitch()
-    rc = forward(const, model=model)
+    rc = forward(design.constant_pitch(), model=model)
     tick()
     lin = forward(design, model=model, linear_at=r.mean)
     tick()
     stiffness = axial_stiffness(design, model)
     tick()
-    off = off_design(design, fractions, model=model)
+    off = off_design(design, LOAD_FRACTIONS, model=model)
     for _ in off:
         tick()
     sens = pitch_error_sensitivity(design, model=model, progress=tick)
-    return {
-        "design_load_N": design.loading.axial_load_n,
-        "installation": design.loading.installation,
-        "ldc_nut_roller": r.ldc_nr.tolist(),
-        "ldc_roller_screw": r.ldc_rs.tolist(),
-        "max_ldc": float(max(r.ldc_nr.max(), r.ldc_rs.max())),
-        "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
-        "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
-        "axial_stiffness_N_per_um": stiffness["secant_N_per_um"],
-        "axial_stiffness": stiffness,
-        "constant_pitch": {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
-                           "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))},
-        "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),
-                         "linearised_at_N": r.mean},
-        "off_design": off,
-        "sensitivity": sens,
-        "compliances": {"model": compliance_model(model), "hertz_nr_mm_per_N2/3": model.hertz_nr, "hertz_rs_mm_per_N2/3": model.hertz_rs,
-                        "tooth_nr_mm_per_N": model.tooth_nr, "tooth_rs_mm_per_N": model.tooth_rs,
-                        "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
-                        "body_nut_mm_per_N": model.body_nut, "details": model.details},
-        "solver_iterations": r.iterations,
-    }, r
+    return LoadDistribution(design_load_n=design.loading.axial_load_n, installation=design.loading.installation,
+                            result=r, constant_pitch=rc, linear=lin, stiffness=stiffness, off_design=off,
+                            sensitivity=sens, model=model)
 
 
 def compliance_model(model: LoadModel) -> str:
@@ -571,7 +620,8 @@ def compliance_model(model: LoadModel) -> str:
     ``"dense"`` (another dense compliance handed in)."""
     if model.compliance is None:
         return "analytic"
-    return str(model.details.get("compliance", "dense"))
+    compliance = model.details.compliance if model.details is not None else None
+    return compliance or "dense"
 
 
 # --------------------------------------------------------------------------- model risk
@@ -601,18 +651,6 @@ class ModelRiskCase:
         """E.g. ``"equal load designed with analytic, under fe"``."""
         made = f" designed with {self.designed_with}" if self.designed_with else ""
         return f"{self.pitch_lists}{made}, under {self.evaluated_with}"
-
-    def report(self) -> dict[str, Any]:
-        return {"pitch_lists": self.pitch_lists, "designed_with": self.designed_with,
-                "evaluated_with": self.evaluated_with, "load_fraction": self.load_fraction, "load_N": self.load_n,
-                "ldc_nut_roller": self.ldc_nut_roller.tolist(), "ldc_roller_screw": self.ldc_roller_screw.tolist(),
-                "max_ldc_nut_roller": float(self.ldc_nut_roller.max()),
-                "max_ldc_roller_screw": float(self.ldc_roller_screw.max()),
-                "min_ldc_nut_roller": float(self.ldc_nut_roller.min()),
-                "min_ldc_roller_screw": float(self.ldc_roller_screw.min()),
-                "max_ldc": float(max(self.ldc_nut_roller.max(), self.ldc_roller_screw.max())),
-                "teeth_out_of_contact": self.teeth_out_of_contact}
-
 
 @dataclass(frozen=True)
 class ModelRisk:
@@ -646,21 +684,6 @@ class ModelRisk:
                     worst = max(worst, float(np.abs(c.ldc_nut_roller - o.ldc_nut_roller).max()),
                                 float(np.abs(c.ldc_roller_screw - o.ldc_roller_screw).max()))
         return worst
-
-    def report(self) -> dict[str, Any]:
-        """The ``model_risk`` section of report.json."""
-        return {"computed": True, "models": list(self.models), "design_load_N": self.design_load_n,
-                "load_fractions": list(self.load_fractions),
-                "largest_model_difference": self.largest_model_difference,
-                "cases": [c.report() for c in self.cases]}
-
-
-#: The ``model_risk`` section of a build that did not compute it.
-MODEL_RISK_NOT_COMPUTED = {
-    "computed": False,
-    "note": "not computed: the model risk compares the analytic and the finite-element compliance; build with "
-            "--compliance fe (or loads.compliance = \"fe\"; needs pip install \"prs-geom[fe]\")"}
-
 
 def model_risk(design: PRSDesign, models: dict[str, LoadModel],
                fractions: Sequence[float] = MODEL_RISK_FRACTIONS) -> ModelRisk:
@@ -696,16 +719,15 @@ def model_risk(design: PRSDesign, models: dict[str, LoadModel],
 class LoadsResult:
     """The loads stage of a build, computed once and passed on.
 
-    ``result`` are the tooth loads at the design load with the design's pitch lists;
-    ``section`` the ``loads`` section of report.json; ``equal_load`` the pitch lists that
+    ``distribution``: the load distribution (``distribution.result`` are the tooth loads at
+    the design load with the design's pitch lists); ``equal_load`` the pitch lists that
     share equally at the design load. ``designed`` is what the plots show as the designed
     state: the design's own lists for a graded design, else the equal-load design, with its
     coefficients (``designed_ldc``), off-design rows and label.
     """
 
     model: LoadModel
-    result: LoadResult
-    section: dict[str, Any]
+    distribution: LoadDistribution
     equal_load: PitchDesign
     designed_ldc: dict[str, list[float]]
     designed_off_design: list[dict[str, Any]]
@@ -713,6 +735,11 @@ class LoadsResult:
     designed_roller_mm: tuple[float, ...]
     designed_nut_mm: tuple[float, ...]
     model_risk: ModelRisk | None = None
+
+    @property
+    def result(self) -> LoadResult:
+        """The tooth loads at the design load with the design's pitch lists."""
+        return self.distribution.result
 
     @property
     def ldc_nut_roller(self) -> NDArray:
@@ -727,28 +754,25 @@ class LoadsResult:
     @property
     def max_ldc(self) -> float:
         """The worst coefficient of both sides."""
-        return float(self.section["max_ldc"])
-
-    def report(self) -> dict[str, Any]:
-        """The ``loads`` section of report.json."""
-        return self.section
+        return self.distribution.max_ldc
 
 
 def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
                   progress: ProgressFn | None = None, model: LoadModel | None = None,
                   compare: dict[str, LoadModel] | None = None) -> LoadsResult:
-    """The loads stage: forward solve, report section, equal-load design and the curves
+    """The loads stage: load distribution, equal-load design and the curves
     of the designed state (see :class:`LoadsResult`).
 
     ``model``: the load model to use (default the analytic :func:`build_model`; the FE one
     comes from :func:`prs_geom.analysis.fe.compliance.fe_load_model`). ``compare``: models by
     name for the model-risk study (:func:`model_risk`), or None for none."""
     model = build_model(design, contact) if model is None else model
-    section, result = _loads_section(design, model, progress)
+    distribution = load_distribution(design, model, progress)
     equal = design_pitches(design, model=model)
     if design.graded:
-        shown = {"ldc_nut_roller": section["ldc_nut_roller"], "ldc_roller_screw": section["ldc_roller_screw"]}
-        off, label = section["off_design"], "design pitch lists"
+        result = distribution.result
+        shown = {"ldc_nut_roller": result.ldc_nr.tolist(), "ldc_roller_screw": result.ldc_rs.tolist()}
+        off, label = distribution.off_design, "design pitch lists"
         pr, pn = tuple(design.pitch_list("roller")), tuple(design.pitch_list("nut"))
     else:
         eq = with_pitch_lists(design, equal)
@@ -757,7 +781,9 @@ def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
         off, label = off_design(eq, model=model), "equal-load pitch design"
         pr, pn = equal.roller_mm, equal.nut_mm
     risk = model_risk(design, compare) if compare else None
-    return LoadsResult(model, result, section, equal, shown, off, label, pr, pn, risk)
+    return LoadsResult(model=model, distribution=distribution, equal_load=equal, designed_ldc=shown,
+                       designed_off_design=off, designed_label=label, designed_roller_mm=pr, designed_nut_mm=pn,
+                       model_risk=risk)
 
 
 def design_pitch(design: PRSDesign, target: str | dict[str, Sequence[float]] = "equal",

@@ -172,7 +172,7 @@ def machining_sheet(design: PRSDesign, part: str, normal_axial: dict[str, float]
                     inspection: dict[str, Any] | None = None) -> MachiningSheet:
     """The sheet of ``part`` ("roller" or "nut"); ``normal_axial`` maps "screw" and "nut" to
     the |n_z| of the screw-roller and roller-nut contacts; ``inspection``: the part's report
-    from :func:`prs_geom.analysis.inspection.inspection_report`, stated in the header."""
+    from :func:`prs_geom.exports.report.inspection_section`, stated in the header."""
     cut = _BaseCut.of(np.asarray(design.pitch_list(part), dtype=np.float64))
     prof = getattr(ThreadProfiles.from_design(design), part)
     return MachiningSheet(part, _sheet_header(design, part, cut, prof, inspection),
@@ -287,7 +287,7 @@ def machining_sheets(design: PRSDesign, contact: ContactResult | None = None,
                      inspection: dict[str, dict[str, Any]] | None = None) -> dict[str, MachiningSheet]:
     """Sheets of roller and nut, with the contact normals of the contact stage (solved here
     when ``contact`` is not given). ``inspection``: the per-part reports of
-    :func:`prs_geom.analysis.inspection.inspection_report`, whose over-wire / over-ball
+    :func:`prs_geom.exports.report.inspection_section`, whose over-wire / over-ball
     values go into each sheet's header."""
     contact = contact if contact is not None else analyse_contact(design)
     nz = {"screw": abs(contact.screw_roller["upper_at_theoretical"].normal[2]),

@@ -192,11 +192,10 @@ def _geometry_term(rolling: float, transverse: float) -> float:
     return (3.0 * T / (2.0 * math.pi * transverse * rolling)) ** LP_C * transverse * (zeta * rolling) ** (1.0 - LP_H)
 
 
-def _axes(h: dict[str, float]) -> tuple[float, float]:
-    """(rolling, transverse) semi-axes per N^(1/3) from :func:`hertz_constant`'s details: the
-    rolling direction is the circumferential one (plane 2 of its curvature order)."""
-    circ = h["circumferential_semi_axis_per_cbrt_N_mm"]
-    a, b = h["semi_major_per_cbrt_N_mm"], h["semi_minor_per_cbrt_N_mm"]
+def _axes(circ: float, a: float, b: float) -> tuple[float, float]:
+    """(rolling, transverse) semi-axes per N^(1/3) from the circumferential, semi-major and
+    semi-minor semi-axes of a Hertz contact (:func:`hertz_constant`): the rolling direction
+    is the circumferential one (plane 2 of its curvature order)."""
     return circ, (b if abs(circ - a) <= abs(circ - b) else a)
 
 
@@ -233,7 +232,9 @@ def general_ball_raceway_capacity(D: float, gamma: float, f: float, Z: int, inne
     track length, Z (1 +- gamma)/2 cycles per turn) with constant K (default the calibrated)."""
     curv, track, per_ball = _ball_raceway(D, gamma, f, inner)
     _, h = hertz_constant(curv, _reference_eta())
-    return (calibration_constant() if K is None else K) * _unit_capacity(*_axes(h), track, Z * per_ball)
+    return (calibration_constant() if K is None else K) * _unit_capacity(
+        *_axes(h["circumferential_semi_axis_per_cbrt_N_mm"], h["semi_major_per_cbrt_N_mm"],
+               h["semi_minor_per_cbrt_N_mm"]), track, Z * per_ball)
 
 
 @lru_cache(maxsize=1)
@@ -296,7 +297,9 @@ class ContactRings:
 
 def contact_rings(design: PRSDesign, contact: ContactResult, model: LoadModel) -> ContactRings:
     """The rings of ``design`` from its contact points and the Hertz details of its load model."""
-    rs, nr = model.details["hertz_rs"], model.details["hertz_nr"]
+    if model.details is None:
+        raise ValueError("the rating needs the Hertz constants of a load model built by build_model")
+    rs, nr = model.details.hertz_rs, model.details.hertz_nr
     c_rs = contact.screw_roller["upper_at_theoretical"]
     c_nr = contact.roller_nut["lower"]
     r_s, r_r, r_n = (0.5 * design.screw.pitch_diameter_mm, 0.5 * design.roller.pitch_diameter_mm,
@@ -304,7 +307,8 @@ def contact_rings(design: PRSDesign, contact: ContactResult, model: LoadModel) -
     z, n = design.roller.count, design.thread.engaged_teeth
     carrier = r_s / (r_s + r_n)                        # w_c / w_s, DOMAIN 9
     roller = carrier * r_n / r_r                       # roller turns relative to the carrier per screw turn
-    ax = (_axes(rs), _axes(nr))
+    ax = tuple(_axes(h.circumferential_semi_axis_per_cbrt_N_mm, h.semi_major_per_cbrt_N_mm,
+                     h.semi_minor_per_cbrt_N_mm) for h in (rs, nr))
     rows = [("screw", 0, n, z * (1.0 - carrier), 2 * math.pi * c_rs.part_radius_mm),
             ("roller_screw_side", 0, z * n, roller, 2 * math.pi * c_rs.roller_radius_mm),
             ("roller_nut_side", 1, z * n, roller, 2 * math.pi * c_nr.roller_radius_mm),
@@ -312,7 +316,7 @@ def contact_rings(design: PRSDesign, contact: ContactResult, model: LoadModel) -
     caps = tuple(ring_capacity(*ax[s], l, u) for _, s, _, u, l in rows)
     return ContactRings(tuple(r[0] for r in rows), tuple(r[1] for r in rows), tuple(r[2] for r in rows), caps,
                         tuple(r[3] for r in rows), tuple(r[4] for r in rows),
-                        (float(rs["normal_axial_component"]), float(nr["normal_axial_component"])), ax, n, z)
+                        (float(rs.normal_axial_component), float(nr.normal_axial_component)), ax, n, z)
 
 
 def dynamic_load_rating(rings: ContactRings) -> float:
@@ -598,9 +602,6 @@ class RatingResult:
 
     section: dict[str, Any]
     curves: dict[str, Any] = field(default_factory=dict, compare=False)
-
-    def report(self) -> dict[str, Any]:
-        return self.section
 
 
 def _variants(design: PRSDesign, model: LoadModel, equal_lists: tuple[Sequence[float], Sequence[float]] | None,

@@ -15,6 +15,7 @@ check (:mod:`prs_geom.checks.interference`).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import fcl
@@ -23,7 +24,7 @@ import numpy as np
 from prs_geom.checks.fcl import bvh_model
 from prs_geom.geometry.mechanism import MechanismLayout
 
-__all__ = ["journal_clearances", "mechanism_section"]
+__all__ = ["journal_clearances", "MechanismCheck", "check_mechanism"]
 
 
 def journal_clearances(asm: Any, lay: MechanismLayout) -> list[dict[str, Any]]:
@@ -52,33 +53,42 @@ def journal_clearances(asm: Any, lay: MechanismLayout) -> list[dict[str, Any]]:
     return rows
 
 
-def mechanism_section(asm: Any, lay: MechanismLayout, ring_designation: str) -> dict[str, Any]:
-    """The ``mechanism`` section of report.json: sizes, fits, journal clearances, stack-up,
-    and a pass/fail list of the checks."""
-    journals = journal_clearances(asm, lay)
-    fits = [lay.journal_fit.report()] + ([lay.carrier_fit.report()] if lay.carrier_fit else [])
-    checks = [{"name": f"fit: {f['feature']}", "passed": f["passed"]} for f in fits]
-    checks.append({"name": "journal clearances (FCL) within the fit", "passed": all(r["passed"] for r in journals)})
-    checks.append({"name": "axial stack-up: play positive at worst case", "passed": lay.stack.passed})
-    ring = lay.ring
-    return {
-        "journal_diameter_mm": lay.journal_diameter_mm,
-        "carrier": {"inner_diameter_mm": 2 * lay.carrier_inner_radius_mm,
-                    "outer_diameter_mm": 2 * lay.carrier_outer_radius_mm,
-                    "thickness_mm": lay.carrier_thickness_mm},
-        "retaining_ring": {"designation": ring_designation, "bore_mm": ring.bore_mm,
-                           "thickness_mm": ring.thickness_mm, "groove_diameter_mm": ring.groove_diameter_mm,
-                           "groove_width_mm": ring.groove_width_mm, "edge_distance_mm": ring.edge_distance_mm,
-                           "section_width_mm": ring.section_width_mm},
-        "nut_end": {"bore_diameter_mm": 2 * lay.nut_bore_radius_mm, "length_mm": lay.ends[0].nut_end[1]
-                    - lay.ends[0].nut_end[0]},
-        "axial_layout_mm": [{"end": side, "gear": list(e.gear_zone), "journal": list(e.journal),
-                             "carrier": list(e.carrier), "retaining_ring": list(e.ring),
-                             "groove": list(e.groove), "nut_end": list(e.nut_end)}
-                            for side, e in zip(("lo", "hi"), lay.ends)],
-        "fits": fits,
-        "journal_clearances": journals,
-        "stack_up": lay.stack.report(),
-        "checks": checks,
-        "passed": all(c["passed"] for c in checks),
-    }
+@dataclass(frozen=True)
+class MechanismCheck:
+    """The checks of the mechanism parts of a placed assembly.
+
+    ``layout``: the mechanism's sizes, fits and stack-up; ``ring_designation``: the
+    retaining ring's standard designation; ``journal_clearances``: the rows of
+    :func:`journal_clearances`. report.json prints it as ``mechanism``
+    (:func:`prs_geom.exports.report.mechanism_section`).
+    """
+
+    layout: MechanismLayout
+    ring_designation: str
+    journal_clearances: tuple[dict[str, Any], ...]
+
+    @property
+    def fits(self) -> list[Any]:
+        """The journal fit, and the carrier fit when the carriers are guided by the nut."""
+        lay = self.layout
+        return [lay.journal_fit] + ([lay.carrier_fit] if lay.carrier_fit else [])
+
+    @property
+    def checks(self) -> list[tuple[str, bool]]:
+        """(name, passed) of every check: each fit, the journal clearances, the stack-up."""
+        out = [(f"fit: {f.feature}", bool(f.passed)) for f in self.fits]
+        out.append(("journal clearances (FCL) within the fit", all(r["passed"] for r in self.journal_clearances)))
+        out.append(("axial stack-up: play positive at worst case", bool(self.layout.stack.passed)))
+        return out
+
+    @property
+    def passed(self) -> bool:
+        """Whether every check passed."""
+        return all(ok for _, ok in self.checks)
+
+
+def check_mechanism(asm: Any, lay: MechanismLayout, ring_designation: str) -> MechanismCheck:
+    """The fits, the journal clearances on the meshes (FCL) and the stack-up of ``lay`` on
+    the placed assembly ``asm``."""
+    return MechanismCheck(layout=lay, ring_designation=ring_designation,
+                          journal_clearances=tuple(journal_clearances(asm, lay)))

@@ -37,12 +37,18 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from prs_geom.analysis.contact import ContactResult
-from prs_geom.analysis.loads import MODEL_RISK_NOT_COMPUTED, LoadsResult
+from prs_geom.analysis.loads import LoadModel, LoadsResult, compliance_model
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.exports.numbers import exact, format_cell, format_quantity, key_label, unit_label
+from prs_geom.exports.report import (MODEL_RISK_NOT_COMPUTED, BuildResults, contact_section, gears_section,
+                                     inspection_section, loads_section, mechanism_section)
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.io import design_hash, design_to_dict
+
+__all__ = ["DISPLAY_TOLERANCE_MM", "COLOURS", "scene_payload", "three_js", "Q", "Raw", "num", "prose", "TEXT_CLASS",
+           "table", "design_rows", "page_template", "fill_template", "TOC_MARK", "page_head", "toc", "page_body",
+           "svg_element", "write_html"]
 
 #: Chordal tolerance (mm) of the display mesh: coarse enough for a light page.
 DISPLAY_TOLERANCE_MM = 0.1
@@ -452,30 +458,31 @@ def _tolerance_html(t: dict[str, Any], svgs: dict[str, str]) -> str:
     return "".join(out)
 
 
-def _compliance_text(comp: dict[str, Any]) -> str:
-    """One sentence naming the tooth-compliance model of a loads section (plain text)."""
-    details = comp.get("details", {})
-    if comp.get("model") == "fe":
-        fe = details["fe"]
-        cache = fe.get("cache", {})
-        hits = cache.get("read_from_cache", {})
-        src = ("read from the cache" if hits and all(hits.values()) else "computed and cached") if cache else "computed"
+def _compliance_text(model: LoadModel, fe_cache: dict[str, Any] | None) -> str:
+    """One sentence naming the tooth-compliance model of a load model (plain text);
+    ``fe_cache``: where its FE influence matrices came from (None: computed, not cached)."""
+    details = model.details
+    if compliance_model(model) == "fe" and details is not None and details.fe is not None:
+        fe = details.fe
+        hits = (fe_cache or {}).get("read_from_cache", {})
+        src = ("read from the cache" if hits and all(hits.values()) else "computed and cached") if fe_cache \
+            else "computed"
         return (f"Tooth compliance: axisymmetric finite-element influence matrices (mesh level "
-                f"{format_cell(fe['mesh_level'])}, {format_cell(fe['teeth'])} teeth, {format_cell(fe['n_dofs'])} "
+                f"{format_cell(fe.mesh_level)}, {format_cell(fe.teeth)} teeth, {format_cell(fe.n_dofs)} "
                 f"degrees of freedom, {src}), coupled between teeth and between a roller's flanks; Hertz contact "
                 f"and 1D bodies as in the analytic model.")
     return (f"Tooth compliance: Yamamoto's terms, diagonal, width convention "
-            f"'{details.get('tooth_width', '')}'.")
+            f"'{details.tooth_width if details is not None else ''}'.")
 
 
 def _range(lo: Any, hi: Any, key: str) -> Raw:
     return Raw(f"{num(lo, key, with_unit=False)} to {num(hi, key, with_unit=False)}")
 
 
-def _model_risk_html(loads: LoadsResult, svgs: dict[str, str]) -> str:
+def _model_risk_html(loads: LoadsResult, svgs: dict[str, str], fe_cache: dict[str, Any] | None) -> str:
     """The model-risk part of the loads section: every set of pitch lists under every
     compliance model (table at the design load, worst over the loads, plots)."""
-    out = [f"<p class='note'>{prose(_compliance_text(loads.report()['compliances']))}</p>",
+    out = [f"<p class='note'>{prose(_compliance_text(loads.model, fe_cache))}</p>",
            "<h3 id='model-risk'>Model risk: analytic against finite-element compliance</h3>"]
     risk = loads.model_risk
     if risk is None:
@@ -613,116 +620,163 @@ def _gears_report(design: PRSDesign) -> dict[str, Any] | None:
         analysis = analyse_gears(design)
     except ValueError:
         return None
-    return None if analysis is None else analysis.report()
+    return None if analysis is None else gears_section(analysis)
 
 
-def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
-               contact: ContactResult | None = None, loads: LoadsResult | None = None,
-               plots_svg: dict[str, str] | None = None, machining: dict[str, MachiningSheet] | None = None,
-               mesh_checks: list[dict[str, Any]] | None = None,
-               tolerance: dict[str, Any] | None = None, checks: dict[str, Any] | None = None,
-               inspection: dict[str, Any] | None = None, date: str = "",
-               rating: dict[str, Any] | None = None, mechanism: dict[str, Any] | None = None,
-               parts_list: list[dict[str, Any]] | None = None, gears: dict[str, Any] | None = None) -> None:
+def _contact_html(contact: ContactResult) -> list[str]:
+    """The contact section: the five contact points, the screw pitch diameters and the
+    angle conventions."""
+    c = contact_section(contact)
+    sr = c["screw_roller"]
+    rows = []
+    for label, key, src in (("screw-roller upper, nominal", "upper_at_nominal", sr),
+                            ("screw-roller lower, nominal", "lower_at_nominal", sr),
+                            ("screw-roller upper, theoretical", "upper_at_theoretical", sr),
+                            ("roller-nut upper", "upper", c["roller_nut"]),
+                            ("roller-nut lower", "lower", c["roller_nut"])):
+        p = src[key]
+        rows.append([label, p["part_radius_mm"], p["part_angle_deg"], p["roller_radius_mm"],
+                     p["roller_angle_deg"], p["gap_mm"]])
+    k = "contact.screw_roller."
+    return ["<h2 id='contact'>Contact</h2>" + table(
+                rows, ["contact", "r part (mm)", "angle part (°)", "r roller (mm)", "angle roller (°)", "gap (mm)"],
+                [None, "part_radius_mm", "part_angle_deg", "roller_radius_mm", "roller_angle_deg", "gap_mm"]),
+            table([["nominal screw pitch diameter (mm)",
+                    Q(sr["nominal_pitch_diameter_mm"], k + "nominal_pitch_diameter_mm")],
+                   ["theoretical screw pitch diameter (mm)",
+                    Q(sr["theoretical_pitch_diameter_mm"], k + "theoretical_pitch_diameter_mm")],
+                   ["interference at nominal, axial (mm)",
+                    Q(sr["interference_at_nominal_mm"], k + "interference_at_nominal_mm")]]),
+            f"<p class='note'>{prose(c['conventions'])}</p>"]
+
+
+def _loads_html(loads: LoadsResult, svgs: dict[str, str], fe_cache: dict[str, Any] | None) -> list[str]:
+    """The load distribution section: its key values, the plots and the model risk."""
+    L = loads_section(loads.distribution, fe_cache)
+    shown = [svgs[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in svgs]
+    return ["<h2 id='loads'>Load distribution</h2>",
+            table([["design load (N)", Q(L["design_load_N"], "loads.design_load_N")],
+                   ["installation", L["installation"]],
+                   ["max LDC", Q(L["max_ldc"], "loads.max_ldc")],
+                   ["max LDC, constant pitch", Q(L["constant_pitch"]["max_ldc"], "loads.max_ldc")],
+                   ["axial stiffness (N/µm)", Q(L["axial_stiffness_N_per_um"], "loads.axial_stiffness_N_per_um")]]),
+            "<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>",
+            _model_risk_html(loads, svgs, fe_cache)]
+
+
+def _parts_list_html(parts_list: list[dict[str, Any]]) -> str:
+    """The parts list (report.json ``parts_list`` rows) with the total mass."""
+    from prs_geom.exports.bom import COLUMNS as BOM_COLUMNS
+
+    return ("<h2 id='parts-list'>Parts list</h2>" + table(
+        [[r[k] for k, _, _ in BOM_COLUMNS] for r in parts_list],
+        [_header(t, u) for _, t, u in BOM_COLUMNS], [f"parts_list.{k}" for k, _, _ in BOM_COLUMNS])
+        + f"<p class='note'>total mass {num(sum(r['total_mass_kg'] for r in parts_list), 'total_mass_kg')}; "
+        "item numbers are the balloons of the assembly drawing; volumes from the meshes.</p>")
+
+
+def _inspection_html(inspection: dict[str, dict[str, Any]]) -> str:
+    """The inspection values of each part (report.json ``inspection``) with its method."""
+    keys = ["pitch_diameter_mm", "lead_angle_deg", "gauge_diameter_mm", "measurement_mm",
+            "measurement_correction_um", "numerical_check_um", "temperature_coefficient_um_per_k"]
+    return ("<h2 id='inspection'>Inspection (20 °C)</h2>" + table(
+        [[part, r["gauge"]] + [Q(r[k], f"inspection.{part}.{k}") for k in keys] for part, r in inspection.items()],
+        ["part", "gauge"] + [key_label(k) for k in keys])
+        + "".join(f"<p class='note'>{html.escape(part)}: {prose(r['method'])}</p>"
+                  for part, r in inspection.items()))
+
+
+def _machining_html(part: str, sheet: MachiningSheet) -> list[str]:
+    """One part's machining sheet: header, starts and the per-tooth rows."""
+    k = f"machining.{part}."
+    ks = k + "starts."
+    return [f"<h2 id='machining-{html.escape(part)}'>Machining sheet: {html.escape(part)}</h2>",
+            table([[key_label(h), Q(v, k + "header." + h)] for h, v in sheet.header.items()]),
+            table([[st["start"], st["angular_index_deg"], st["axial_offset_mm"], st["nominal_lead_mm"],
+                    st["lead_min_mm"], st["lead_max_mm"], " ".join(map(str, st["teeth_at_theta_0"]))]
+                   for st in sheet.starts],
+                  ["start", "angular index (°)", "axial offset (mm)", "nominal lead (mm)",
+                   "lead min (mm)", "lead max (mm)", "teeth at theta = 0"],
+                  [None, ks + "angular_index_deg", ks + "axial_offset_mm", ks + "nominal_lead_mm",
+                   ks + "lead_min_mm", ks + "lead_max_mm", None]),
+            table([[r[c] for c, _, _ in COLUMNS] for r in sheet.rows],
+                  [_header(t, u) for _, t, u in COLUMNS], [k + "rows." + c for c, _, _ in COLUMNS])]
+
+
+def _mesh_checks_html(mesh_checks: list[dict[str, Any]]) -> str:
+    """Each exported part mesh against its analytic surface (report.json ``checks.meshes``)."""
+    return "<h2 id='mesh-checks'>Mesh checks</h2>" + table(
+        [[m["part"], m["triangles"], m["watertight"], m["manifold"], m["chord_tolerance_mm"],
+          m["max_deviation_mm"]] for m in mesh_checks],
+        ["part", "triangles", "watertight", "manifold", "chord tol. (mm)", "max deviation (mm)"],
+        [None, None, None, None, "chord_tolerance_mm", "max_deviation_mm"])
+
+
+def _checks_shown(results: BuildResults) -> dict[str, Any] | None:
+    """What the checks section shows: the interference and FCL checks when they ran; an empty
+    section (the per-tooth gaps only) when only the mesh checks ran; None when neither did."""
+    if results.checks is not None:
+        return {"fcl": results.checks.fcl, "interference": results.checks.interference}
+    return {} if results.meshes is not None else None
+
+
+def _gears_shown(results: BuildResults) -> dict[str, Any] | None:
+    """The ``gears`` section of the gears stage, or (stage not run) computed from the design."""
+    if results.gears is not None:
+        return gears_section(results.gears)
+    return _gears_report(results.design) if results.design.gears.enabled else None
+
+
+def _analysis_html(results: BuildResults, svgs: dict[str, str]) -> list[str]:
+    """The sections of the analysis stages, in page order: contact to parts list."""
+    parts: list[str] = []
+    if results.contact is not None:
+        parts += _contact_html(results.contact)
+    if results.loads is not None:
+        parts += _loads_html(results.loads, svgs, results.fe_cache)
+    if results.rating is not None:
+        parts.append(_rating_html(results.rating.section, svgs))
+    if results.tolerance is not None:
+        parts.append(_tolerance_html(results.tolerance.section, svgs))
+    checks = _checks_shown(results)
+    if checks is not None:
+        parts.append(_checks_html(checks, results.contact))
+    gears = _gears_shown(results)
+    if gears:
+        parts.append(_gears_html(gears))
+    if results.mechanism is not None:
+        parts.append(_mechanism_html(mechanism_section(results.mechanism)))
+    if results.parts_list:
+        parts.append(_parts_list_html([r.as_dict() for r in results.parts_list]))
+    return parts
+
+
+def write_html(path: Path, results: BuildResults, plots_svg: dict[str, str] | None, date: str, version: str) -> None:
     """Write ``report.html`` from the stage results of a build.
 
-    ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG text, as the plot stage
-    rendered them; the page shows them inline. ``gears`` is report.json's ``gears``
-    section; when not given it is computed from the design (the same pure analysis as the
-    gears stage). Templates, style sheet and viewer script are package data
-    (``templates/report.html``, ``report.css``, ``viewer.js``).
+    ``results``: each stage's result (:class:`~prs_geom.exports.report.BuildResults`; a stage
+    that did not run has no section, except the gears, computed from the design when the
+    gears stage did not run). ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG
+    text, as the plot stage rendered them; the page shows them inline. ``date`` and
+    ``version`` go into the provenance line. Templates, style sheet and viewer script are
+    package data (``templates/report.html``, ``report.css``, ``viewer.js``).
 
     Every number goes through :mod:`prs_geom.exports.numbers` (the exact value in a
     tooltip); the page opens with a table of contents and every table scrolls sideways in
     its own box.
     """
+    design, svgs = results.design, plots_svg or {}
     parts = page_head(f"Planetary roller screw '{html.escape(design.name)}'", version, date, design_hash(design),
-                      "Units mm, N, MPa; tooth 1 at the loaded end.", warnings, "cut the nut open")
-    if contact is not None:
-        c = contact.report()
-        sr = c["screw_roller"]
-        rows = []
-        for label, key, src in (("screw-roller upper, nominal", "upper_at_nominal", sr),
-                                ("screw-roller lower, nominal", "lower_at_nominal", sr),
-                                ("screw-roller upper, theoretical", "upper_at_theoretical", sr),
-                                ("roller-nut upper", "upper", c["roller_nut"]),
-                                ("roller-nut lower", "lower", c["roller_nut"])):
-            p = src[key]
-            rows.append([label, p["part_radius_mm"], p["part_angle_deg"], p["roller_radius_mm"],
-                         p["roller_angle_deg"], p["gap_mm"]])
-        parts.append("<h2 id='contact'>Contact</h2>" + table(
-            rows, ["contact", "r part (mm)", "angle part (°)", "r roller (mm)", "angle roller (°)", "gap (mm)"],
-            [None, "part_radius_mm", "part_angle_deg", "roller_radius_mm", "roller_angle_deg", "gap_mm"]))
-        k = "contact.screw_roller."
-        parts.append(table([
-            ["nominal screw pitch diameter (mm)", Q(sr["nominal_pitch_diameter_mm"], k + "nominal_pitch_diameter_mm")],
-            ["theoretical screw pitch diameter (mm)",
-             Q(sr["theoretical_pitch_diameter_mm"], k + "theoretical_pitch_diameter_mm")],
-            ["interference at nominal, axial (mm)",
-             Q(sr["interference_at_nominal_mm"], k + "interference_at_nominal_mm")]]))
-        parts.append(f"<p class='note'>{prose(c['conventions'])}</p>")
-    if loads is not None:
-        L = loads.report()
-        parts.append("<h2 id='loads'>Load distribution</h2>")
-        parts.append(table([["design load (N)", Q(L["design_load_N"], "loads.design_load_N")],
-                            ["installation", L["installation"]],
-                            ["max LDC", Q(L["max_ldc"], "loads.max_ldc")],
-                            ["max LDC, constant pitch", Q(L["constant_pitch"]["max_ldc"], "loads.max_ldc")],
-                            ["axial stiffness (N/µm)",
-                             Q(L["axial_stiffness_N_per_um"], "loads.axial_stiffness_N_per_um")]]))
-        shown = [plots_svg[f] for f in ("loads_ldc", "pitch_corrections", "off_design") if f in (plots_svg or {})]
-        parts.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")
-        parts.append(_model_risk_html(loads, plots_svg or {}))
-    if rating is not None:
-        parts.append(_rating_html(rating, plots_svg or {}))
-    if tolerance is not None:
-        parts.append(_tolerance_html(tolerance, plots_svg or {}))
-    if checks:
-        parts.append(_checks_html(checks, contact))
-    if gears is None and design.gears.enabled:
-        gears = _gears_report(design)
-    if gears:
-        parts.append(_gears_html(gears))
-    if mechanism:
-        parts.append(_mechanism_html(mechanism))
-    if parts_list:
-        from prs_geom.exports.bom import COLUMNS as BOM_COLUMNS
-
-        parts.append("<h2 id='parts-list'>Parts list</h2>" + table(
-            [[r[k] for k, _, _ in BOM_COLUMNS] for r in parts_list],
-            [_header(t, u) for _, t, u in BOM_COLUMNS], [f"parts_list.{k}" for k, _, _ in BOM_COLUMNS])
-            + f"<p class='note'>total mass {num(sum(r['total_mass_kg'] for r in parts_list), 'total_mass_kg')}; "
-            "item numbers are the balloons of the assembly drawing; volumes from the meshes.</p>")
-    if inspection:
-        keys = ["pitch_diameter_mm", "lead_angle_deg", "gauge_diameter_mm", "measurement_mm",
-                "measurement_correction_um", "numerical_check_um", "temperature_coefficient_um_per_k"]
-        parts.append("<h2 id='inspection'>Inspection (20 °C)</h2>" + table(
-            [[part, r["gauge"]] + [Q(r[k], f"inspection.{part}.{k}") for k in keys] for part, r in inspection.items()],
-            ["part", "gauge"] + [key_label(k) for k in keys])
-            + "".join(f"<p class='note'>{html.escape(part)}: {prose(r['method'])}</p>"
-                      for part, r in inspection.items()))
-    for part, sheet in (machining or {}).items():
-        k = f"machining.{part}."
-        parts.append(f"<h2 id='machining-{html.escape(part)}'>Machining sheet: {html.escape(part)}</h2>")
-        parts.append(table([[key_label(h), Q(v, k + "header." + h)]
-                            for h, v in sheet.header.items()]))
-        ks = k + "starts."
-        parts.append(table([[st["start"], st["angular_index_deg"], st["axial_offset_mm"], st["nominal_lead_mm"],
-                             st["lead_min_mm"], st["lead_max_mm"], " ".join(map(str, st["teeth_at_theta_0"]))]
-                            for st in sheet.starts],
-                           ["start", "angular index (°)", "axial offset (mm)", "nominal lead (mm)",
-                            "lead min (mm)", "lead max (mm)", "teeth at theta = 0"],
-                           [None, ks + "angular_index_deg", ks + "axial_offset_mm", ks + "nominal_lead_mm",
-                            ks + "lead_min_mm", ks + "lead_max_mm", None]))
-        parts.append(table([[r[c] for c, _, _ in COLUMNS] for r in sheet.rows],
-                           [_header(t, u) for _, t, u in COLUMNS], [k + "rows." + c for c, _, _ in COLUMNS]))
+                      "Units mm, N, MPa; tooth 1 at the loaded end.", results.warnings, "cut the nut open")
+    parts += _analysis_html(results, svgs)
+    if results.inspection:
+        parts.append(_inspection_html(inspection_section(results.inspection)))
+    for part, sheet in (results.machining or {}).items():
+        parts += _machining_html(part, sheet)
     parts.append("<h2 id='design'>Design</h2>" + table(design_rows(design_to_dict(design)), ["field", "value"]))
-    if mesh_checks is not None:
-        parts.append("<h2 id='mesh-checks'>Mesh checks</h2>" + table(
-            [[m["part"], m["triangles"], m["watertight"], m["manifold"], m["chord_tolerance_mm"],
-              m["max_deviation_mm"]] for m in mesh_checks],
-            ["part", "triangles", "watertight", "manifold", "chord tol. (mm)", "max deviation (mm)"],
-            [None, None, None, None, "chord_tolerance_mm", "max_deviation_mm"]))
+    if results.meshes is not None:
+        parts.append(_mesh_checks_html(results.meshes.checks))
+    contact = results.contact
     payload = json.dumps(scene_payload(design, screw_profile=contact.screw_profile if contact else None)
                          ).replace("</", "<\\/")
     three = three_js()
@@ -730,5 +784,5 @@ def write_html(path: Path, design: PRSDesign, version: str, warnings: list[str],
         "title": html.escape(design.name), "css": page_template("report.css"), "body": page_body(parts),
         "scene": payload, "viewer": page_template("viewer.js"), "importmap": three["importmap"],
         "three_version": three["version"], "three_licence": three["licence"].replace("--", "- -")})
-    # the template file ends with a newline; the page has always ended at </html>
+    # the template file ends with a newline; the page ends at </html>
     path.write_text(page.rstrip("\n"), encoding="utf-8")

@@ -2,7 +2,7 @@
 
 Owns loading the shipped schema ``prs_geom/exports/schemas/report.schema.json`` (draft 2020-12,
 ``$id`` ``urn:prs-geom:report:1``; it describes ``format_version`` 1, see
-:data:`prs_geom.pipeline.REPORT_FORMAT_VERSION`) and checking a report against it. A change
+:data:`prs_geom.exports.report.REPORT_FORMAT_VERSION`) and checking a report against it. A change
 to the layout of report.json belongs in the schema too; the test suite validates every
 build against it.
 """
@@ -16,6 +16,8 @@ from typing import Any
 
 import jsonschema
 from jsonschema.exceptions import best_match
+
+__all__ = ["SCHEMA_PACKAGE", "SCHEMA_NAME", "load_schema", "validate_report"]
 
 SCHEMA_PACKAGE = "prs_geom.exports.schemas"
 SCHEMA_NAME = "report.schema.json"

@@ -32,12 +32,11 @@ symmetric (Maxwell-Betti, every part) and checked positive semi-definite there.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom.analysis.fe.teeth import InfluenceMatrices
+from prs_geom.analysis.load_details import FePartSummary, FeSummary
 from prs_geom.analysis.load_solver import LoadModel, block_compliance
 from prs_geom.model.errors import DesignError
 
@@ -81,31 +80,29 @@ def fe_load_model(model: LoadModel, infl: InfluenceMatrices) -> LoadModel:
                           f"(lowest eigenvalue {lowest:.3g} mm/N against {scale:.3g}): the split into body, "
                           f"tooth and local terms does not hold here; use loads.compliance = \"analytic\"")
     fe = replace(model, compliance=C)
-    return replace(fe, details={**model.details, "compliance": "fe", "fe": fe_summary(infl, fe)})
+    if model.details is None:
+        raise ValueError("the FE load model extends an analytic model built by build_model (it has details)")
+    return replace(fe, details=replace(model.details, compliance="fe", fe=fe_summary(infl, fe)))
 
 
-def fe_summary(infl: InfluenceMatrices, model: LoadModel) -> dict[str, Any]:
-    """What report.json says about the FE compliance a load model carries: mesh level,
-    teeth, degrees of freedom, symmetry, and the per-contact tooth compliances of the middle
-    tooth next to the diagonal Yamamoto terms they replace (mm/N)."""
+def fe_summary(infl: InfluenceMatrices, model: LoadModel) -> FeSummary:
+    """The FE compliance a load model carries: mesh level, teeth, degrees of freedom,
+    symmetry, and the per-contact tooth compliances of the middle tooth next to the diagonal
+    Yamamoto terms they replace (mm/N)."""
     C = np.asarray(model.compliance)
     n = model.n
     mid = n // 2
     parts = {}
     for p in infl:
-        parts[p.part] = {"n_dofs": int(p.n_dofs), "asymmetry": p.asymmetry, "seconds": float(p.seconds),
-                         "body_per_pitch_ratio_to_1d": p.body_per_pitch / p.body_per_pitch_1d}
-    return {
-        "model": "fe",
-        "mesh_level": int(infl.screw.level),
-        "teeth": int(infl.screw.teeth),
-        "n_dofs": int(infl.n_dofs),
-        "parts": parts,
-        "pair_compliance_middle_tooth_mm_per_N": {"nut_roller": float(C[mid, mid]),
-                                                  "roller_screw": float(C[n + mid, n + mid]),
-                                                  "flank_coupling": float(C[mid, n + mid])},
-        "pair_compliance_uniform_mm_per_N": {"nut_roller": float(C[mid, :n].sum()),
-                                             "roller_screw": float(C[n + mid, n:].sum())},
-        "yamamoto_mm_per_N": {"nut_roller": model.tooth_nr, "roller_screw": model.tooth_rs},
-        "eigenvalues_mm_per_N": [float(v) for v in np.linalg.eigvalsh(C)[[0, -1]]],
-    }
+        parts[p.part] = FePartSummary(n_dofs=int(p.n_dofs), asymmetry=p.asymmetry, seconds=float(p.seconds),
+                                      body_per_pitch_ratio_to_1d=p.body_per_pitch / p.body_per_pitch_1d)
+    lowest, highest = (float(v) for v in np.linalg.eigvalsh(C)[[0, -1]])
+    return FeSummary(
+        mesh_level=int(infl.screw.level), teeth=int(infl.screw.teeth), n_dofs=int(infl.n_dofs), parts=parts,
+        pair_compliance_middle_tooth_mm_per_N={"nut_roller": float(C[mid, mid]),
+                                               "roller_screw": float(C[n + mid, n + mid]),
+                                               "flank_coupling": float(C[mid, n + mid])},
+        pair_compliance_uniform_mm_per_N={"nut_roller": float(C[mid, :n].sum()),
+                                          "roller_screw": float(C[n + mid, n:].sum())},
+        yamamoto_mm_per_N={"nut_roller": model.tooth_nr, "roller_screw": model.tooth_rs},
+        eigenvalues_mm_per_N=(lowest, highest))

@@ -646,8 +646,8 @@ def calibrate_tooth_width(design: PRSDesign, level: int = CONVERGED_LEVEL, teeth
     secs = part_sections(design, contact)
     infl = InfluenceMatrices(*(part_influence(secs[p], level, teeth) for p in ("screw", "roller", "nut")))
     details = build_model(design, contact).details
-    yam_key = {"screw": "tooth_screw", "nut": "tooth_nut", "roller_nut_side": "tooth_roller_nut_side",
-               "roller_screw_side": "tooth_roller_screw_side"}
+    yamamoto = {"screw": details.tooth_screw, "nut": details.tooth_nut,
+                "roller_nut_side": details.tooth_roller_nut_side, "roller_screw_side": details.tooth_roller_screw_side}
     pitch_share = {"screw": math.pi * 2.0 * contact.theoretical.profile.pitch_radius / design.roller.count,
                    "nut": math.pi * design.nut.pitch_diameter_mm / design.roller.count,
                    "roller_nut_side": math.pi * design.roller.pitch_diameter_mm,
@@ -669,9 +669,10 @@ def calibrate_tooth_width(design: PRSDesign, level: int = CONVERGED_LEVEL, teeth
             uniform = float(T[i].sum()) * n_c
             interior = np.diag(T)[block][_middle(teeth)]
             spread[fl.name] = float(interior.max() / interior.min() - 1.0)
-            det = details[yam_key[fl.name]]
-            w_model = det["width_mm"]
-            terms = {k_: det[k_] * w_model for k_ in ("bending", "shear", "root_tilt", "root_shear", "radial")}
+            terms_per_width = yamamoto[fl.name]
+            w_model = terms_per_width.width_mm
+            terms = {k_: getattr(terms_per_width, k_) * w_model
+                     for k_ in ("bending", "shear", "root_tilt", "root_shear", "radial")}
             lam = sum(terms.values())
             widths = {"unit": 1.0, "contact_ellipse": 2.0 * fl.ellipse.circumferential_semi_axis_mm,
                       "pitch_circle_share": pitch_share[fl.name]}

@@ -1,0 +1,526 @@
+"""The report serialiser: report.json's sections from the typed results of the analysis.
+
+The one place where the report's layout and its prose live: each ``*_section`` function
+turns one result object into the dict report.json prints under that section's key (keys in
+a fixed order; the layout is described by ``prs_geom/exports/schemas/report.schema.json``),
+and :func:`report_dict` assembles the whole report from a build's :class:`BuildResults`.
+The warnings a build prints are worded here too. The analysis classes compute; they do not
+know the report.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Mapping
+
+import numpy as np
+
+from prs_geom.analysis.contact import ContactResult
+from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
+from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, compliance_model
+
+if TYPE_CHECKING:  # pragma: no cover
+    from prs_geom.analysis.gears import GearAnalysis
+    from prs_geom.analysis.inspection import PartInspection
+    from prs_geom.analysis.kinematics import Kinematics
+    from prs_geom.analysis.machining import MachiningSheet
+    from prs_geom.analysis.rating import RatingResult
+    from prs_geom.checks.mechanism import MechanismCheck
+    from prs_geom.exports.bom import PartsListRow
+    from prs_geom.geometry.gears import SpurGear
+    from prs_geom.mesh.assembly import Assembly
+
+__all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "MODEL_RISK_NOT_COMPUTED",
+           "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
+           "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
+           "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
+           "BuildResults", "report_dict"]
+
+
+# --------------------------------------------------------------------------- contact
+#: What the angles, flanks and frames of the ``contact`` section mean.
+ANGLE_CONVENTIONS = (
+    "part_angle_deg: angle of the contact on the screw or nut from the line of centres "
+    "(screw axis -> roller axis), positive counter-clockwise seen from +z; "
+    "roller_angle_deg: angle in the roller frame from the direction pointing away from the "
+    "screw axis (screw-side contacts near +-180, nut-side near 0); left-hand designs are "
+    "mirror images (angles change sign). upper = roller upper flank (facing +z) against the "
+    "lower flank of the screw/nut tooth above it; lower = the mirror contact. Points and "
+    "normals in the screw frame (mm); normals point to +z."
+)
+
+
+def contact_section(contact: ContactResult) -> dict[str, Any]:
+    """The ``contact`` section: the contact points, the theoretical screw pitch diameter and
+    (graded designs) the per-tooth gaps."""
+    theo, d = contact.theoretical, contact.design
+    return {
+        "conventions": ANGLE_CONVENTIONS,
+        "screw_roller": {
+            **{k: v.as_dict() for k, v in contact.screw_roller.items()},
+            "nominal_pitch_diameter_mm": theo.nominal_pitch_diameter_mm,
+            "theoretical_pitch_diameter_mm": theo.theoretical_pitch_diameter_mm,
+            "diameter_correction_mm": theo.nominal_pitch_diameter_mm - theo.theoretical_pitch_diameter_mm,
+            "interference_at_nominal_mm": max(0.0, -theo.gap_at_nominal_mm),
+            "interference_at_nominal_normal_mm": contact.interference_at_nominal_normal_mm,
+            "clearance_mm": d.contact.clearance_mm,
+            "gap_at_theoretical_mm": theo.gap_at_theoretical_mm,
+            "diameter_iterations": theo.iterations,
+        },
+        "roller_nut": {k: v.as_dict() for k, v in contact.roller_nut.items()},
+        "tooth_gaps": contact.tooth_gaps,
+    }
+
+
+# --------------------------------------------------------------------------- gears
+#: How the roller gears are phased (``gears.phasing.rule``).
+GEAR_PHASING_RULE = ("one roller gear offset meshes every roller when z divides z_ring - n_s z_g; "
+                     "ring gear tooth 0 on the nut's +x axis at both ends")
+#: What the running clearance measures (``gears.running_clearance.what``).
+GEAR_RUNNING_CLEARANCE = ("least 2D distance of every roller gear to the ring gear over one "
+                          "ring pitch of carrier travel")
+
+
+def _gear(g: "SpurGear", internal: bool) -> dict[str, Any]:
+    """One gear's data and shop measurements (span over k teeth, size over or between pins)."""
+    k = g.recommended_span_teeth()
+    pin = g.ideal_pin_diameter()
+    return {"teeth": g.teeth, "module_mm": g.module_mm, "pressure_angle_deg": g.pressure_angle_deg,
+            "profile_shift": g.profile_shift, "addendum_coefficient": g.addendum_coefficient,
+            "dedendum_coefficient": g.dedendum_coefficient,
+            "pitch_diameter_mm": 2.0 * g.pitch_radius_mm, "base_diameter_mm": 2.0 * g.base_radius_mm,
+            "tip_diameter_mm": 2.0 * g.tip_radius_mm, "root_diameter_mm": 2.0 * g.root_radius_mm,
+            "tooth_thickness_mm": g.tooth_thickness_mm, "backlash_thinning_mm": g.backlash_mm,
+            "span_teeth": k, "span_measurement_mm": g.span_measurement(k),
+            "pin_diameter_mm": pin,
+            ("between_pins_mm" if internal else "over_pins_mm"): g.over_pins(pin)}
+
+
+def gears_section(gears: "GearAnalysis") -> dict[str, Any]:
+    """The ``gears`` section: both gears, the pair, every check, the phasing and the running
+    clearance of the synchronising gears."""
+    from prs_geom.analysis.gears import SWEEP_CHORD_MM
+
+    c = gears.checks
+    return {
+        "rule": gears.pair.rule,
+        "roller_gear": _gear(gears.roller_gear, False),
+        "ring_gear": _gear(gears.ring_gear, True),
+        "face_width_mm": gears.face_width_mm,
+        "centre_distance_mm": gears.pair.centre_distance_mm,
+        "ratio": gears.pair.ratio,
+        "working_pressure_angle_deg": c.working_pressure_angle_deg,
+        "contact_ratio": c.contact_ratio,
+        "backlash_circumferential_mm": c.backlash_circumferential_mm,
+        "backlash_normal_mm": c.backlash_normal_mm,
+        "checks": [{"name": i.name, "passed": i.passed, "value": i.value, "limit": i.limit, "unit": i.unit,
+                    "rule": i.rule} for i in c.items],
+        "phasing": {"consistent": gears.phasing.consistent, "divisible": gears.divisible,
+                    "roller_gear_offset_deg": math.degrees(gears.phasing.offset_rad),
+                    "max_residual_deg": float(np.degrees(np.abs(gears.phasing.residuals_rad).max(initial=0.0))),
+                    "rule": GEAR_PHASING_RULE},
+        "running_clearance": {"min_mm": gears.sweep.min_clearance_mm, "overlap": gears.sweep.any_overlap,
+                              "steps": int(len(gears.sweep.advance_rad)),
+                              "chord_tolerance_mm": SWEEP_CHORD_MM,
+                              "what": GEAR_RUNNING_CLEARANCE},
+        "passed": gears.passed,
+    }
+
+
+def gear_failures(gears: "GearAnalysis") -> list[str]:
+    """The names of the failed gear checks, then ``phasing`` and ``running clearance`` when
+    those fail."""
+    failed = [i.name for i in gears.checks.items if not i.passed]
+    return (failed + ([] if gears.phasing.consistent else ["phasing"])
+            + (["running clearance"] if gears.sweep.any_overlap else []))
+
+
+# --------------------------------------------------------------------------- warnings
+def gear_warnings(gears: "GearAnalysis") -> list[str]:
+    """The build's warning when a gear check, the phasing or the running clearance fails."""
+    return [] if gears.passed else ["end gears: " + ", ".join(gear_failures(gears)) + " failed (report gears)"]
+
+
+def fe_cache_warnings(cache: Any) -> list[str]:
+    """The FE cache's own warnings, and one when the matrices could not be stored
+    (``cache``: a :class:`prs_geom.fe_cache.CachedInfluence`)."""
+    out = list(cache.warnings)
+    if not cache.stored:
+        out.append(f"the finite-element influence matrices could not be stored in {cache.folder} (they were "
+                   f"computed and used; set $PRS_GEOM_CACHE to a writable folder to keep them)")
+    return out
+
+
+def rating_warnings(rating: "RatingResult") -> list[str]:
+    """The build's warnings when the speed or the largest load exceeds its permissible limit."""
+    sec = rating.section
+    lim = sec["limits"]
+    out = []
+    if not lim["speed_ok"]:
+        out.append(f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
+                   f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
+    if not lim["buckling_ok"]:
+        out.append(f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
+                   f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    return out
+
+
+def step_warnings(step: dict[str, Any]) -> list[str]:
+    """A warning for each STEP part that could not be made a valid solid (``step``: the
+    ``step`` section)."""
+    return [f"STEP: the {part} could not be made a valid solid; {part}.step was not written: {row['reason']}"
+            for part, row in step["parts"].items() if not row["valid"]]
+
+
+def mechanism_warnings(m: "MechanismCheck") -> list[str]:
+    """The build's warning naming the failed mechanism checks."""
+    failed = [name for name, ok in m.checks if not ok]
+    return ["mechanism: " + "; ".join(failed) + " failed (report mechanism)"] if failed else []
+
+
+# --------------------------------------------------------------------------- loads
+def _hertz(h: HertzContact) -> dict[str, float]:
+    return {"sum_rho_per_mm": h.sum_rho_per_mm, "F_rho": h.F_rho, "ellipticity_k": h.ellipticity_k,
+            "semi_major_per_cbrt_N_mm": h.semi_major_per_cbrt_N_mm,
+            "semi_minor_per_cbrt_N_mm": h.semi_minor_per_cbrt_N_mm,
+            "circumferential_semi_axis_per_cbrt_N_mm": h.circumferential_semi_axis_per_cbrt_N_mm,
+            "normal_axial_component": h.normal_axial_component, "C_normal": h.C_normal}
+
+
+def _tooth(t: ToothTerms) -> dict[str, float]:
+    return {"a_mm": t.a_mm, "b_mm": t.b_mm, "c_mm": t.c_mm, "width_mm": t.width_mm, "bending": t.bending,
+            "shear": t.shear, "root_tilt": t.root_tilt, "root_shear": t.root_shear, "radial": t.radial}
+
+
+def _fe_summary(fe: FeSummary, cache: Mapping[str, Any] | None) -> dict[str, Any]:
+    out = {"model": "fe", "mesh_level": fe.mesh_level, "teeth": fe.teeth, "n_dofs": fe.n_dofs,
+           "parts": {name: {"n_dofs": p.n_dofs, "asymmetry": p.asymmetry, "seconds": p.seconds,
+                            "body_per_pitch_ratio_to_1d": p.body_per_pitch_ratio_to_1d}
+                     for name, p in fe.parts.items()},
+           "pair_compliance_middle_tooth_mm_per_N": dict(fe.pair_compliance_middle_tooth_mm_per_N),
+           "pair_compliance_uniform_mm_per_N": dict(fe.pair_compliance_uniform_mm_per_N),
+           "yamamoto_mm_per_N": dict(fe.yamamoto_mm_per_N),
+           "eigenvalues_mm_per_N": list(fe.eigenvalues_mm_per_N)}
+    if cache is not None:
+        out["cache"] = dict(cache)
+    return out
+
+
+def load_details_dict(details: LoadModelDetails | None, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """``loads.compliances.details``: what the load model was made from. ``cache``: where the
+    FE influence matrices came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`), shown
+    inside the FE summary."""
+    if details is None:
+        return {}
+    out: dict[str, Any] = {
+        "tooth_width": details.tooth_width, "hertz_rs": _hertz(details.hertz_rs),
+        "hertz_nr": _hertz(details.hertz_nr), "tooth_screw": _tooth(details.tooth_screw),
+        "tooth_roller_screw_side": _tooth(details.tooth_roller_screw_side),
+        "tooth_roller_nut_side": _tooth(details.tooth_roller_nut_side), "tooth_nut": _tooth(details.tooth_nut),
+        "section_areas_mm2": {"screw": details.section_areas_mm2.screw, "roller": details.section_areas_mm2.roller,
+                              "nut": details.section_areas_mm2.nut}}
+    if details.compliance is not None:
+        out["compliance"] = details.compliance
+    if details.fe is not None:
+        out["fe"] = _fe_summary(details.fe, cache)
+    return out
+
+
+def constant_pitch_section(dist: LoadDistribution) -> dict[str, Any]:
+    """``loads.constant_pitch``: the coefficients of both sides with constant pitch and the
+    worst of them."""
+    rc = dist.constant_pitch
+    return {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
+            "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))}
+
+
+def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The ``loads`` section: coefficients and tooth loads at the design load, constant
+    pitch, the linear model, stiffness, off-design, sensitivity and the compliances.
+    ``cache``: as for :func:`load_details_dict`."""
+    r, lin, model = dist.result, dist.linear, dist.model
+    return {
+        "design_load_N": dist.design_load_n,
+        "installation": dist.installation,
+        "ldc_nut_roller": r.ldc_nr.tolist(),
+        "ldc_roller_screw": r.ldc_rs.tolist(),
+        "max_ldc": dist.max_ldc,
+        "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
+        "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
+        "axial_stiffness_N_per_um": dist.stiffness["secant_N_per_um"],
+        "axial_stiffness": dist.stiffness,
+        "constant_pitch": constant_pitch_section(dist),
+        "linear_model": {"ldc_nut_roller": lin.ldc_nr.tolist(), "ldc_roller_screw": lin.ldc_rs.tolist(),
+                         "linearised_at_N": r.mean},
+        "off_design": dist.off_design,
+        "sensitivity": dist.sensitivity,
+        "compliances": {"model": compliance_model(model), "hertz_nr_mm_per_N2/3": model.hertz_nr,
+                        "hertz_rs_mm_per_N2/3": model.hertz_rs,
+                        "tooth_nr_mm_per_N": model.tooth_nr, "tooth_rs_mm_per_N": model.tooth_rs,
+                        "body_screw_mm_per_N": model.body_screw, "body_roller_mm_per_N": model.body_roller,
+                        "body_nut_mm_per_N": model.body_nut, "details": load_details_dict(model.details, cache)},
+        "solver_iterations": r.iterations,
+    }
+
+
+#: The ``model_risk`` section of a build that did not compute it.
+MODEL_RISK_NOT_COMPUTED = {
+    "computed": False,
+    "note": "not computed: the model risk compares the analytic and the finite-element compliance; build with "
+            "--compliance fe (or loads.compliance = \"fe\"; needs pip install \"prs-geom[fe]\")"}
+
+
+def _model_risk_case(c: ModelRiskCase) -> dict[str, Any]:
+    return {"pitch_lists": c.pitch_lists, "designed_with": c.designed_with,
+            "evaluated_with": c.evaluated_with, "load_fraction": c.load_fraction, "load_N": c.load_n,
+            "ldc_nut_roller": c.ldc_nut_roller.tolist(), "ldc_roller_screw": c.ldc_roller_screw.tolist(),
+            "max_ldc_nut_roller": float(c.ldc_nut_roller.max()),
+            "max_ldc_roller_screw": float(c.ldc_roller_screw.max()),
+            "min_ldc_nut_roller": float(c.ldc_nut_roller.min()),
+            "min_ldc_roller_screw": float(c.ldc_roller_screw.min()),
+            "max_ldc": float(max(c.ldc_nut_roller.max(), c.ldc_roller_screw.max())),
+            "teeth_out_of_contact": c.teeth_out_of_contact}
+
+
+def model_risk_section(risk: ModelRisk | None) -> dict[str, Any]:
+    """The ``model_risk`` section: every set of pitch lists under every compliance model, or
+    :data:`MODEL_RISK_NOT_COMPUTED` (a copy) when ``risk`` is None."""
+    if risk is None:
+        return dict(MODEL_RISK_NOT_COMPUTED)
+    return {"computed": True, "models": list(risk.models), "design_load_N": risk.design_load_n,
+            "load_fractions": list(risk.load_fractions),
+            "largest_model_difference": risk.largest_model_difference,
+            "cases": [_model_risk_case(c) for c in risk.cases]}
+
+
+# --------------------------------------------------------------------------- inspection
+def inspection_section(parts: Mapping[str, "PartInspection"]) -> dict[str, dict[str, Any]]:
+    """The ``inspection`` section: every value of each part's inspection (units in the key
+    names), the reference temperature and whether the numerical check passed."""
+    from dataclasses import fields
+
+    return {part: {**{f.name: getattr(r, f.name) for f in fields(r)}, "reference_temperature_degc": 20.0,
+                   "check_passed": r.check_passed} for part, r in parts.items()}
+
+
+# --------------------------------------------------------------------------- mechanism
+def mechanism_section(m: "MechanismCheck") -> dict[str, Any]:
+    """The ``mechanism`` section: sizes, fits, journal clearances, stack-up, and a pass/fail
+    list of the checks."""
+    lay, ring = m.layout, m.layout.ring
+    checks = [{"name": name, "passed": ok} for name, ok in m.checks]
+    return {
+        "journal_diameter_mm": lay.journal_diameter_mm,
+        "carrier": {"inner_diameter_mm": 2 * lay.carrier_inner_radius_mm,
+                    "outer_diameter_mm": 2 * lay.carrier_outer_radius_mm,
+                    "thickness_mm": lay.carrier_thickness_mm},
+        "retaining_ring": {"designation": m.ring_designation, "bore_mm": ring.bore_mm,
+                           "thickness_mm": ring.thickness_mm, "groove_diameter_mm": ring.groove_diameter_mm,
+                           "groove_width_mm": ring.groove_width_mm, "edge_distance_mm": ring.edge_distance_mm,
+                           "section_width_mm": ring.section_width_mm},
+        "nut_end": {"bore_diameter_mm": 2 * lay.nut_bore_radius_mm, "length_mm": lay.ends[0].nut_end[1]
+                    - lay.ends[0].nut_end[0]},
+        "axial_layout_mm": [{"end": side, "gear": list(e.gear_zone), "journal": list(e.journal),
+                             "carrier": list(e.carrier), "retaining_ring": list(e.ring),
+                             "groove": list(e.groove), "nut_end": list(e.nut_end)}
+                            for side, e in zip(("lo", "hi"), lay.ends)],
+        "fits": [f.report() for f in m.fits],
+        "journal_clearances": list(m.journal_clearances),
+        "stack_up": lay.stack.report(),
+        "checks": checks,
+        "passed": all(c["passed"] for c in checks),
+    }
+
+
+# --------------------------------------------------------------------------- build results
+#: Version of the report.json layout (``format_version``); the JSON Schema
+#: ``prs_geom/exports/schemas/report.schema.json`` describes it.
+REPORT_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class PitchLists:
+    """The pitch lists of the three parts (mm, tooth 1 at the loaded end)."""
+
+    screw_mm: tuple[float, ...]
+    roller_mm: tuple[float, ...]
+    nut_mm: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class MeshStage:
+    """The meshes stage: the assembly at the design's chord tolerance and its checks
+    (``checks.meshes`` rows of :func:`prs_geom.mesh.thread.mesh_report`)."""
+
+    assembly: "Assembly"
+    checks: list[dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class ChecksResult:
+    """The checks of a build: the FCL verification of the contacts (``checks.fcl``) and the
+    interference check (``checks.interference``), as those checks report them."""
+
+    fcl: dict[str, Any]
+    interference: dict[str, Any]
+
+
+@dataclass
+class BuildResults:
+    """Each stage's result of a build (None: the stage did not run or has nothing for this
+    design), filled in stage order; the exports render report.json and report.html from it.
+
+    ``warnings`` is the build's warning list (the design's sizing warnings first, then each
+    stage's, in stage order); ``fe_cache``: where the FE influence matrices of the loads stage
+    came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`; None for the analytic model).
+    """
+
+    design: Any
+    #: ``"prs"`` or ``"harmonic"`` (the product line of ``design``)
+    kind: str = "prs"
+    warnings: list[str] = field(default_factory=list)
+    pitch: PitchLists | None = None
+    contact: ContactResult | None = None
+    gears: "GearAnalysis | None" = None
+    loads: LoadsResult | None = None
+    fe_cache: dict[str, Any] | None = None
+    rating: "RatingResult | None" = None
+    #: the tolerance study (:class:`prs_geom.studies.ToleranceStudy`, a layer above the exports)
+    tolerance: Any = None
+    meshes: MeshStage | None = None
+    #: the ``step`` section of :func:`prs_geom.exports.step.write_step` (``--step`` builds)
+    step: dict[str, Any] | None = None
+    mechanism: "MechanismCheck | None" = None
+    kinematics: "Kinematics | None" = None
+    parts_list: list["PartsListRow"] | None = None
+    checks: ChecksResult | None = None
+    inspection: dict[str, "PartInspection"] | None = None
+    machining: dict[str, "MachiningSheet"] | None = None
+    #: the harmonic line: its ``harmonic`` section, mesh checks, ``assembly`` section and
+    #: assembly checks (``checks.assembly``)
+    harmonic: dict[str, Any] | None = None
+    harmonic_meshes: list[dict[str, Any]] | None = None
+    harmonic_assembly: dict[str, Any] | None = None
+    harmonic_assembly_checks: dict[str, Any] | None = None
+    #: every file written, in writing order (output-relative paths)
+    files: list[str] = field(default_factory=list)
+    #: each stage's time (s), by stage name in run order
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+
+def check_warnings(mesh_checks: list[dict[str, Any]] | None, checks: ChecksResult | None = None) -> list[str]:
+    """Every check whose measured difference exceeds its documented tolerance, as one line
+    each: the ``warnings`` of the mesh checks (rows of ``checks.meshes``) and of the FCL
+    verification."""
+    out = []
+    for row in mesh_checks or []:
+        out += [f"mesh check ({row['part']}): {w}" for w in row.get("warnings", [])]
+    fcl_check = checks.fcl if checks is not None else {}
+    out += [f"FCL check: {w}" for w in (fcl_check or {}).get("warnings", [])]
+    return out
+
+
+def assembly_section(results: BuildResults) -> dict[str, Any]:
+    """The ``assembly`` section: the placed parts, the rollers' carrier angles and spins (deg)
+    and the triangle count of the meshes stage's assembly."""
+    from prs_geom.geometry.frames import carrier_angles, roller_spin
+
+    d, asm = results.design, results.meshes.assembly
+    return {
+        "parts": list(asm.placed),
+        "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
+        "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
+        "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
+    }
+
+
+def _pitch_section(results: BuildResults) -> dict[str, Any] | None:
+    """The ``pitch`` section: the pitch lists, with the equal-load lists of the loads stage."""
+    if results.pitch is None:
+        return None
+    out: dict[str, Any] = {"screw_mm": list(results.pitch.screw_mm), "roller_mm": list(results.pitch.roller_mm),
+                           "nut_mm": list(results.pitch.nut_mm)}
+    if results.loads is not None:
+        equal = results.loads.equal_load
+        out["equal_load"] = {"roller_mm": list(equal.roller_mm), "nut_mm": list(equal.nut_mm)}
+    return out
+
+
+def _checks_section(results: BuildResults) -> dict[str, Any]:
+    """The ``checks`` section: the mesh checks, the FCL verification and the interference
+    check, those that ran."""
+    out: dict[str, Any] = {}
+    if results.harmonic_meshes is not None:
+        out["meshes"] = results.harmonic_meshes
+    if results.harmonic_assembly_checks is not None:
+        out["assembly"] = results.harmonic_assembly_checks
+    if results.meshes is not None:
+        out["meshes"] = results.meshes.checks
+    if results.checks is not None:
+        out.update({"fcl": results.checks.fcl, "interference": results.checks.interference})
+    return out
+
+
+def _harmonic_report(results: BuildResults) -> dict[str, Any]:
+    from prs_geom._version import __version__
+    from prs_geom.model.io import design_to_dict
+
+    out = {"format_version": REPORT_FORMAT_VERSION, "prs_geom_version": __version__, "kind": "harmonic",
+           "design": design_to_dict(results.design), "warnings": results.warnings, "harmonic": results.harmonic,
+           "checks": _checks_section(results), "timings_s": results.timings_s, "files": results.files}
+    if results.harmonic_assembly is not None:
+        out["assembly"] = results.harmonic_assembly
+    return out
+
+
+def _stage_sections(results: BuildResults) -> dict[str, Any]:
+    """The sections of the stages that ran and have one, in stage order."""
+    out: dict[str, Any] = {}
+    if results.gears is not None:
+        out["gears"] = gears_section(results.gears)
+    if results.loads is not None:
+        out["model_risk"] = model_risk_section(results.loads.model_risk)
+    if results.rating is not None:
+        out["rating"] = results.rating.section
+    if results.tolerance is not None:
+        out["tolerance"] = results.tolerance.section
+    if results.meshes is not None:
+        out["assembly"] = assembly_section(results)
+    if results.step is not None:
+        out["step"] = results.step
+    if results.mechanism is not None:
+        out["mechanism"] = mechanism_section(results.mechanism)
+    if results.kinematics is not None:
+        out["kinematics"] = results.kinematics.as_dict()
+    if results.parts_list is not None:
+        out["parts_list"] = [r.as_dict() for r in results.parts_list]
+    if results.inspection is not None:
+        out["inspection"] = inspection_section(results.inspection)
+    return out
+
+
+def report_dict(results: BuildResults) -> dict[str, Any]:
+    """report.json of a build from its results: the layout of
+    ``prs_geom/exports/schemas/report.schema.json``, sections in stage order (a stage that did
+    not run leaves its skeleton entry None, or has no entry)."""
+    if results.kind == "harmonic":
+        return _harmonic_report(results)
+    from prs_geom._version import __version__
+    from prs_geom.model.io import design_to_dict
+
+    return {
+        "format_version": REPORT_FORMAT_VERSION,
+        "prs_geom_version": __version__,
+        "design": design_to_dict(results.design),
+        "warnings": results.warnings,
+        "contact": contact_section(results.contact) if results.contact is not None else None,
+        "loads": loads_section(results.loads.distribution, results.fe_cache) if results.loads is not None else None,
+        "pitch": _pitch_section(results),
+        "checks": _checks_section(results),
+        "machining": ({part: sh.as_dict() for part, sh in results.machining.items()}
+                      if results.machining is not None else None),
+        "timings_s": results.timings_s,
+        "files": results.files,
+        **_stage_sections(results),
+    }
