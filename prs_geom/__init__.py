@@ -21,6 +21,11 @@ Python API (``import prs_geom as pg``; see README "Python API")::
     pg.save_design(graded, "graded.toml")
     meshes = pg.build_meshes(graded)       # named trimesh meshes
     report = pg.build(graded, "exports/graded")
+    rating = pg.analyse_rating(d)          # load ratings, life, limits, efficiency
+    study = pg.tolerance_study(d)          # Monte Carlo under the design's [tolerances]
+    robust = pg.robust_pitch(d, spectrum)  # pitch lists for a duty cycle
+    table = pg.sweep(d, rollers=[8, 10])   # a design-space sweep
+    pg.write_step(d, "parts.step")         # STEP solids (the 'step' extra)
 
 Importing the package is light: every name loads its module on first use, so
 ``import prs_geom`` imports no mesh, CAD or plotting library.
@@ -44,6 +49,11 @@ _API: dict[str, tuple[str, str]] = {
     "design_pitch": ("prs_geom.pipeline", "design_pitch"),
     "build_meshes": ("prs_geom.pipeline", "build_meshes"),
     "build": ("prs_geom.pipeline", "build"),
+    "analyse_rating": ("prs_geom.analysis.rating", "analyse_rating"),
+    "tolerance_study": ("prs_geom.studies", "tolerance_study"),
+    "robust_pitch": ("prs_geom.studies", "robust_pitch"),
+    "sweep": ("prs_geom.sweep", "sweep"),
+    "write_step": ("prs_geom.exports.step", "write_step"),
     "PRSGeomError": ("prs_geom.model.errors", "PRSGeomError"),
     "DesignError": ("prs_geom.model.errors", "DesignError"),
     "DesignWarning": ("prs_geom.model.errors", "DesignWarning"),

@@ -53,12 +53,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.fe.cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
 
+# the build's stages, its context and its worker jobs are the machinery behind build(), not API
 __all__ = ["REPORT_NAME", "DESIGN_KINDS", "load_any_design", "Analysis", "LoadModels", "load_models", "analyse",
-           "design_pitch", "build_meshes", "BuildOptions", "BuildContext", "stage_design", "stage_pitch",
-           "stage_contact", "stage_gears", "stage_loads", "BUILD_ROBUST_NOTE", "stage_rating", "stage_tolerance",
-           "mesh_checks_job", "stage_meshes", "checks_job", "stage_checks", "stage_manufacturing",
-           "stage_mechanism", "stage_html", "STAGES", "run_stages", "harmonic_stage", "HARMONIC_STAGES",
-           "plan_build", "build"]
+           "design_pitch", "build_meshes", "BuildOptions", "plan_build", "build"]
 
 #: The file name of the build report in the output folder.
 REPORT_NAME = "report.json"
@@ -68,7 +65,15 @@ DESIGN_KINDS: dict[str, type] = {**PRS_KINDS, "harmonic": HarmonicDesign}
 
 # --------------------------------------------------------------------------- API
 def load_any_design(path: str | Path) -> PRSDesign | HarmonicDesign:
-    """A design file of either product line (by its ``kind``), validated."""
+    """A design file of either product line (by its ``kind``), validated.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> pg.save_design(pg.HarmonicDesign(), "drive.toml")
+    >>> type(pg.load_design("drive.toml")).__name__
+    'HarmonicDesign'
+    """
     return load_design(path, DESIGN_KINDS)
 
 
@@ -76,7 +81,15 @@ def load_any_design(path: str | Path) -> PRSDesign | HarmonicDesign:
 class Analysis:
     """The analysis of a design: ``contact`` (:class:`~prs_geom.analysis.contact.ContactResult`,
     e.g. ``.contact.theoretical_screw_pitch_diameter_mm``) and ``loads``
-    (:class:`~prs_geom.analysis.loads.LoadsResult`, e.g. ``.loads.max_ldc``)."""
+    (:class:`~prs_geom.analysis.loads.LoadsResult`, e.g. ``.loads.max_ldc``).
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> result = pg.analyse(pg.default_design())
+    >>> isinstance(result, pg.Analysis), result.design.name
+    (True, 'default')
+    """
 
     design: PRSDesign
     contact: ContactResult
@@ -89,7 +102,7 @@ class LoadModels:
 
     ``model`` is the one the analysis uses; with ``"fe"``, ``compare`` holds both models by
     name (``"analytic"``, ``"fe"``) for the model-risk study and ``cache`` says where the
-    influence matrices came from (:mod:`prs_geom.fe_cache`)."""
+    influence matrices came from (:mod:`prs_geom.analysis.fe.cache`)."""
 
     model: LoadModel
     compare: dict[str, LoadModel] | None = None
@@ -126,7 +139,17 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
 def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
     """Contact points, theoretical screw diameter and load distribution of ``design``
     (with the compliance model of ``design.loads.compliance``; with ``"fe"`` also the model
-    risk, ``.loads.model_risk``)."""
+    risk, ``.loads.model_risk``).
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> result = pg.analyse(pg.default_design())
+    >>> round(result.contact.theoretical_screw_pitch_diameter_mm, 6)   # mm, from 24 mm nominal
+    23.86787
+    >>> round(result.loads.max_ldc, 4)     # worst tooth's load over the mean, constant pitch
+    1.4292
+    """
     contact = analyse_contact(design)
     models = load_models(design, contact, progress)
     return Analysis(design, contact, analyse_loads(design, contact, progress=progress, model=models.model,
@@ -136,14 +159,32 @@ def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
 def design_pitch(design: PRSDesign, target: str | dict[str, Any] = "equal", name: str | None = None) -> PRSDesign:
     """A new design whose pitch lists give ``target`` load sharing at the design load:
     ``"equal"`` or ``{"nut_roller": [...], "roller_screw": [...]}`` (mean 1 each), under
-    the compliance model of ``design.loads.compliance``."""
+    the compliance model of ``design.loads.compliance``.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> graded = pg.design_pitch(pg.default_design())
+    >>> graded.graded, len(graded.roller.pitch_list_mm)      # one pitch per tooth gap
+    (True, 19)
+    >>> round(pg.analyse(graded).loads.max_ldc, 9)           # equal sharing at the design load
+    1.0
+    """
     return _design_pitch(design, target, name, model=load_models(design).model)
 
 
 def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trimesh.Trimesh"]:
     """Triangle meshes of the design, by name: ``screw``, ``roller`` and ``nut`` in their
     own frames, and every placed scene part (``roller_0`` ..., gears) in the screw frame.
-    ``tol`` is the chord tolerance (mm; the design's by default)."""
+    ``tol`` is the chord tolerance (mm; the design's by default).
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> meshes = pg.build_meshes(pg.default_design(), tol=0.05)
+    >>> all(meshes[name].is_watertight for name in ("screw", "roller", "nut"))
+    True
+    """
     from prs_geom.mesh.assembly import build_assembly
 
     asm = build_assembly(design, tol=tol)
@@ -378,7 +419,7 @@ def stage_tolerance(ctx: BuildContext) -> None:
 
     # the build's own worker count: the study shares the build's pool (a pool of another size
     # would be resized under the build's running jobs) and its memory plan (plan_build); the
-    # numbers are the same on any number of workers (prs_geom.scaleout)
+    # numbers are the same on any number of workers (prs_geom.runtime.scaleout)
     workers = ctx.background.workers if ctx.background is not None else 0
     ctx.results.tolerance = study = tolerance_study(d, contact=ctx.results.contact, model=ctx.results.loads.model,
                                             execution=Execution(workers=max(workers, 1), progress=ctx.progress))
@@ -568,7 +609,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
                options: BuildOptions | None = None, workers: int | None = None) -> BuildContext:
     """Run ``stages`` (:data:`STAGES` by default) on a new :class:`BuildContext`; the checks,
     drawings and plots go to worker processes when ``workers`` allows
-    (:mod:`prs_geom.background`; None: ``$PRS_GEOM_WORKERS`` or the default).
+    (:mod:`prs_geom.runtime.pool`; None: ``$PRS_GEOM_WORKERS`` or the default).
 
     ``timings_s`` gives each stage's own work: its wall time in the main process, less the
     time it waited for background jobs, plus the time of the jobs it started (the checks,
@@ -657,7 +698,7 @@ def plan_build(design: PRSDesign, memory_budget: int | None = None) -> "tuple[in
     """Worker processes and the memory estimate of building ``design``: the one estimate
     that ``build`` applies and ``validate`` prints.
 
-    The default worker count (:func:`prs_geom.background.default_workers`), none for a
+    The default worker count (:func:`prs_geom.runtime.pool.default_workers`), none for a
     design checked in axial windows, and none when the design fits ``memory_budget``
     (bytes; None: the default budget) only serially, because the workers' peaks add to the
     main process's. Raises :class:`~prs_geom.mesh.budget.ResourceLimitError` when it fits
@@ -697,6 +738,15 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     that were edited since prs-geom wrote them (refused otherwise); ``source``, the design
     file the design was read from: when it lies inside ``out_dir`` it is kept byte for
     byte. Returns the report dict.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> report = pg.build(pg.default_design(), "exports/default")
+    >>> report["loads"]["max_ldc"] == pg.analyse(pg.default_design()).loads.max_ldc
+    True
+    >>> sorted(f for f in report["files"] if f.endswith(".stl"))[:3]
+    ['assembly.stl', 'carrier.stl', 'nut.stl']
     """
     harmonic = isinstance(design, HarmonicDesign)
     atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
@@ -713,7 +763,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     from prs_geom.mesh.budget import ResourceLimitError, default_budget_bytes
     from prs_geom.runtime.memwatch import MemoryWatch
 
-    # the budget holds while the build runs, too (prs_geom.memwatch): exit 3, nothing written
+    # the budget holds while the build runs, too (prs_geom.runtime.memwatch): exit 3, nothing written
     watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,
                         f"the build of {design.name}")
     try:

@@ -151,7 +151,24 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                     loads_n: Sequence[float] | None = None, confidence: float | None = None) -> ToleranceStudy:
     """Monte Carlo study of ``design`` under ``tolerances`` (default: the design's
     ``[tolerances]``): ``tolerances.samples`` samples from ``tolerances.seed`` at its load
-    fractions (or at ``loads_n``, N), all z rollers side by side."""
+    fractions (or at ``loads_n``, N), all z rollers side by side.
+
+    Examples
+    --------
+    Flank positions within +-2 um on every tooth, 400 samples:
+
+    >>> import prs_geom as pg
+    >>> from dataclasses import replace
+    >>> from prs_geom.model.design import Tolerances
+    >>> design = replace(pg.default_design(), tolerances=Tolerances(flank_um=2.0, samples=400, seed=1))
+    >>> study = pg.tolerance_study(design)
+    >>> study.worst.shape                        # each sample's worst load coefficient
+    (400,)
+    >>> round(float(study.deterministic.max()), 4)  # without errors: the constant-pitch worst tooth
+    1.4292
+    >>> bool(study.worst.mean() > study.deterministic.max())
+    True
+    """
     tolerances = require_error_model(design, tolerances)
     if confidence is not None:
         check_probability("confidence", confidence)
@@ -472,7 +489,22 @@ def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances |
     the family of :mod:`prs_geom.analysis.robust` (run in parallel), then Nelder-Mead from
     the best grid point, on common draws. Constant pitch (0, 0) and equal-at-design-load
     (1, 1) are members of the grid, so the result is never worse than either on the
-    objective."""
+    objective.
+
+    Examples
+    --------
+    A duty of 70 % of the time at 10 kN and 30 % at 20 kN, without manufacturing errors:
+
+    >>> import prs_geom as pg
+    >>> from prs_geom.model.spectrum import LoadCase, Spectrum
+    >>> duty = Spectrum((LoadCase(10000.0, 0.7), LoadCase(20000.0, 0.3)))
+    >>> robust = pg.robust_pitch(pg.default_design(), duty, samples=1)
+    >>> c = robust.comparison
+    >>> round(c["constant_pitch"]["objective"], 3), round(c["equal_at_design_load"]["objective"], 3)
+    (1.429, 1.17)
+    >>> round(c["robust"]["objective"], 3)
+    1.093
+    """
     from scipy import optimize
     check_probability("quantile", quantile)
     tolerances = tolerances or design.tolerances or Tolerances()

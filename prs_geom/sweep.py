@@ -310,12 +310,26 @@ def _axis(name: str, values: Sequence[Any] | None, default: Any) -> tuple[Any, .
     return out
 
 
+def _load_fractions(loads: tuple[Any, ...], fractions: tuple[Any, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The load axis and the evaluation fractions as floats, each a number > 0; the
+    fractions distinct (they name the table's columns)."""
+    for name, axis in (("loads", loads), ("fractions", fractions)):
+        for i, f in enumerate(axis):
+            if isinstance(f, bool) or not isinstance(f, numbers.Real) or not math.isfinite(f) or f <= 0:
+                raise DesignError(f"{name}[{i}]", f, "must be a number > 0 (a fraction of the design load)")
+    fractions = tuple(float(f) for f in fractions)
+    if len({_fraction_name(f) for f in fractions}) != len(fractions):
+        raise DesignError("fractions", list(fractions), "must not repeat a value")
+    return tuple(float(f) for f in loads), fractions
+
+
 def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Sequence[int] | None = None,
           pitch_mm: Sequence[float] | None = None, teeth: Sequence[int] | None = None,
           loads: Sequence[float] | None = None, fractions: Sequence[float] = DEFAULT_FRACTIONS,
           workers: int | None = None, scheduler: Any = None, dask_workers: int | None = None,
           progress: ProgressFn | None = None) -> SweepResult:
     """Evaluate every combination of the given values on ``design`` (module doc).
+
 
     Parameters
     ----------
@@ -356,6 +370,14 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
         invalid backend options. A point the model rejects is a row, not an error.
     EnvironmentFailure
         Dask asked for but not installed, or its scheduler cannot be reached.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> result = pg.sweep(pg.default_design(), rollers=[8, 10])
+    >>> [(row["rollers"], round(row["constant_max_ldc"], 3), round(row["graded_max_ldc_100pct"], 3))
+    ...  for row in result.rows()]
+    [(8, 1.375, 1.0), (10, 1.429, 1.0)]
     """
     from prs_geom.runtime.scaleout import plan_chunks, run_chunks
 
@@ -364,15 +386,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
     p_axis = _axis("pitch_mm", pitch_mm, design.thread.pitch_mm)
     n_axis = _axis("teeth", teeth, design.thread.engaged_teeth)
     f_axis = _axis("loads", loads, 1.0)
-    fractions = tuple(fractions)
-    for name, axis in (("loads", f_axis), ("fractions", fractions)):
-        for i, f in enumerate(axis):
-            if isinstance(f, bool) or not isinstance(f, numbers.Real) or not math.isfinite(f) or f <= 0:
-                raise DesignError(f"{name}[{i}]", f, "must be a number > 0 (a fraction of the design load)")
-    f_axis = tuple(float(f) for f in f_axis)
-    fractions = tuple(float(f) for f in fractions)
-    if len({_fraction_name(f) for f in fractions}) != len(fractions):
-        raise DesignError("fractions", list(fractions), "must not repeat a value")
+    f_axis, fractions = _load_fractions(f_axis, tuple(fractions))
     points = [SweepPoint(i, s, z, p, n, f)
               for i, (s, z, p, n, f) in enumerate(itertools.product(s_axis, z_axis, p_axis, n_axis, f_axis))]
     if workers is None and scheduler is None and dask_workers is None and len(points) < SERIAL_BELOW:

@@ -70,3 +70,132 @@ def validate_every_build():
             if path and getattr(mod, "build", None) is original and tests_dir in Path(path).resolve().parents:
                 mp.setattr(mod, "build", checked_build)
         yield checked_build
+
+
+# --------------------------------------------------------------------------- shared builds
+#: Designs built once per test run for the tests that only read a build's outputs.
+SHARED_DESIGNS = {"default": None, "graded": "graded-pitch.toml", "harmonic": "harmonic.toml"}
+
+
+def _shared_build(name: str, tmp_path_factory) -> "SharedBuild":
+    """Build ``name`` once per test run, shared by every xdist worker.
+
+    The first worker to ask builds into a folder beside the workers' own temporary folders,
+    under an exclusive file lock; the others wait on the lock and read the finished folder.
+    The folder is read-only by contract: a test that changes outputs builds its own.
+    """
+    import fcntl
+    import json
+    from pathlib import Path
+
+    from prs_geom import pipeline
+    from prs_geom.model.design import default_design
+
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    out = root / f"shared-build-{name}"
+    with open(root / f"shared-build-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (out / pipeline.REPORT_NAME).is_file():
+            example = SHARED_DESIGNS[name]
+            design = default_design() if example is None else pipeline.load_any_design(
+                Path(__file__).resolve().parents[1] / "examples" / example)
+            pipeline.build(design, out)
+    report = json.loads((out / pipeline.REPORT_NAME).read_text(encoding="utf-8"))
+    return SharedBuild(out=out, report=report)
+
+
+class SharedBuild:
+    """A finished build shared by the tests of one run: its folder and its report.json."""
+
+    def __init__(self, out, report):
+        self.out = out
+        self.report = report
+
+
+@pytest.fixture(scope="session")
+def default_build(tmp_path_factory) -> SharedBuild:
+    """The built-in default design, built once per test run (read-only)."""
+    return _shared_build("default", tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def graded_build(tmp_path_factory) -> SharedBuild:
+    """examples/graded-pitch.toml, built once per test run (read-only)."""
+    return _shared_build("graded", tmp_path_factory)
+
+
+@pytest.fixture(scope="session")
+def harmonic_build(tmp_path_factory) -> SharedBuild:
+    """examples/harmonic.toml, built once per test run (read-only)."""
+    return _shared_build("harmonic", tmp_path_factory)
+
+
+# --------------------------------------------------------------------------- markers
+#: Markers that keep a test out of the quick subset (``pytest -m quick``).
+SLOW_MARKERS = ("heavy", "golden", "docs", "slow")
+
+
+#: Test files whose tests build whole designs, run subprocesses or browsers: all ``slow``.
+SLOW_FILES = {
+    "test_api", "test_background", "test_exports", "test_fe_compliance", "test_fuzz", "test_html",
+    "test_interference", "test_interference_cache", "test_interference_windows", "test_interrupts",
+    "test_mechanism", "test_pipeline", "test_report_schema", "test_safety", "test_scene", "test_step",
+    "test_studies",
+}
+#: (file, test-name prefix) of the slow tests in otherwise quick files, as measured with
+#: ``--durations=0`` (each takes seconds: a build, a sampled sweep, a convergence study).
+SLOW_TESTS = {
+    ("test_architecture", "test_theoretical_diameter_is_solved_once_per_build"),
+    ("test_architecture", "test_package_import_is_light"),
+    ("test_assembly", "test_end_gears_mesh_with_the_ring_gear"),
+    ("test_cli", "test_failing_build_leaves_earlier_output_unchanged"),
+    ("test_cli", "test_console_script_exit_code"),
+    ("test_designio", "test_init_then_build_round_trips"),
+    ("test_drawing", "test_dxf_bytes_are_deterministic"),
+    ("test_fcl_verify", "test_fcl_check_agrees_or_explains_on_sampled_designs"),
+    ("test_fe", "test_mesh_convergence_three_levels"),
+    ("test_fe", "test_fe_calibrated_width_supports"),
+    ("test_fe_cache", "test_key_follows_material_geometry_and_code"),
+    ("test_harmonic", "test_harmonic_outputs_files_and_report_keys"),
+    ("test_harmonic", "test_build_harmonic_writes_exports"),
+    ("test_harmonic", "test_report_html_viewer_draws"),
+    ("test_injection", "test_build_"),
+    ("test_load_solver", "test_rollers_agree_with_the_other_formulations"),
+    ("test_machining", "test_csv_reads_back_to_report_numbers"),
+    ("test_mesh", "test_deviation_within_tolerance"),
+    ("test_mesh", "test_sampled_designs_give_closed_accurate_meshes"),
+    ("test_mesh", "test_fine_tolerance_assembly_meshes"),
+    ("test_numeric_guards", "test_build_of_every_accepted_value"),
+    ("test_plots", "test_plot_in_a_worker_process"),
+    ("test_progress", "test_a_build_announces_its_stages"),
+    ("test_scaleout", "test_local_dask_cluster"),
+    ("test_scaleout", "test_dask_cluster_by_address"),
+    ("test_sweep", "test_joblib_equals_serial"),
+    ("test_scaleout", "test_joblib_equals_serial"),
+    ("test_tolerance", "test_build_of_toleranced_design"),
+    ("test_tolerance", "test_synthesis_meets_target_in_independent_rerun"),
+    ("test_code_health", "test_no_duplicate_code"),
+}
+#: The documentation tests: pages rendered, the site built, docstring examples run.
+DOCS_FILES = {"test_docs", "test_api_examples"}
+DOCS_TESTS = {("test_architecture", "test_docs_build_strict")}
+
+
+def _is_slow(item) -> bool:
+    module = item.path.stem
+    return module in SLOW_FILES or any(module == f and item.name.startswith(p) for f, p in SLOW_TESTS)
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark the measured slow tests ``slow`` (:data:`SLOW_FILES`, :data:`SLOW_TESTS`) and every
+    test without a slow marker ``quick``: ``pytest -m quick -n auto`` is the day-to-day subset
+    (docs/development.md)."""
+    for item in items:
+        if _is_slow(item):
+            item.add_marker(pytest.mark.slow)
+        module = item.path.stem
+        if module in DOCS_FILES or any(module == f and item.name.startswith(p) for f, p in DOCS_TESTS):
+            item.add_marker(pytest.mark.docs)
+        if not any(item.get_closest_marker(m) for m in SLOW_MARKERS):
+            item.add_marker(pytest.mark.quick)

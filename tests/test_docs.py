@@ -587,3 +587,20 @@ def test_index_links_every_theory_page():
     missing = [p.relative_to(DOCS).as_posix() for p in sorted((DOCS / "theory").glob("*.md"))
                if p.relative_to(DOCS).as_posix() not in linked]
     assert not missing, "docs/index.md does not link: " + ", ".join(missing)
+
+
+def test_api_reference_covers_every_module():
+    """Each public module of the package has its ``::: module`` entry on one page of docs/
+    (the API reference, or the topic page that explains it; mkdocstrings renders the names
+    of its ``__all__``); private modules (``_name``) and ``__main__`` are not API."""
+    package = ROOT / "prs_geom"
+    modules = set()
+    for path in package.rglob("*.py"):
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        parts = parts[:-1] if parts[-1] == "__init__" else parts
+        if not any(p.startswith("_") for p in parts):
+            modules.add(".".join(parts))
+    documented = {m for page in PAGES
+                  for m in re.findall(r"^::: (\S+)", page.read_text(encoding="utf-8"), re.M)}
+    assert sorted(modules - documented) == [], "modules without a reference entry"
+    assert sorted(documented - modules) == [], "reference entries of modules that do not exist"

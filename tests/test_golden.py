@@ -13,6 +13,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent / "golden"))
 
+pytestmark = pytest.mark.golden
+
 from fingerprint import DATA, DESIGNS, build_fingerprint, compare_numbers  # noqa: E402
 
 

@@ -14,7 +14,7 @@ import pytest
 
 from prs_geom.exports.numbers import format_cell
 from prs_geom.model.design import MeshSettings, PRSDesign, Roller
-from prs_geom.pipeline import build, load_any_design
+from prs_geom.pipeline import build
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 if CHROMIUM is None and os.environ.get("CI"):
@@ -179,7 +179,6 @@ def test_view_motions_are_the_kinematics(report_html):
 
 
 # --------------------------------------------------------------------------- report.html for people (issue 28)
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 #: a number of more than 10 significant digits in visible text (digit groups joined by U+202F)
 LONG_NUMBER = re.compile(r"(?<![\w.])\d[\d\u202f]*(?:\.\d+)?")
 PYTHON_WORDS = re.compile(r"\b(None|True|False|nan|NaN)\b")
@@ -271,25 +270,19 @@ def parse_page(page: Path) -> _Page:
 
 
 @pytest.fixture(scope="module")
-def default_page(tmp_path_factory):
-    """The default design, built once for the module: its report.html and report.json."""
-    out = tmp_path_factory.mktemp("people") / "default"
-    build(PRSDesign(), out)
-    return out / "report.html", json.loads((out / "report.json").read_text(encoding="utf-8"))
+def default_page(default_build):
+    """The default design's report.html and report.json (the run's shared build)."""
+    return default_build.out / "report.html", default_build.report
 
 
 @pytest.fixture(scope="module")
-def graded_page(tmp_path_factory):
-    out = tmp_path_factory.mktemp("people") / "graded"
-    build(load_any_design(EXAMPLES / "graded-pitch.toml"), out)
-    return out / "report.html", json.loads((out / "report.json").read_text(encoding="utf-8"))
+def graded_page(graded_build):
+    return graded_build.out / "report.html", graded_build.report
 
 
 @pytest.fixture(scope="module")
-def harmonic_page(tmp_path_factory):
-    out = tmp_path_factory.mktemp("people") / "harmonic"
-    build(load_any_design(EXAMPLES / "harmonic.toml"), out)
-    return out / "report.html", json.loads((out / "report.json").read_text(encoding="utf-8"))
+def harmonic_page(harmonic_build):
+    return harmonic_build.out / "report.html", harmonic_build.report
 
 
 @pytest.mark.parametrize("which", ["default_page", "graded_page", "harmonic_page"])

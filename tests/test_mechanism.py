@@ -20,7 +20,6 @@ from prs_geom.mesh.thread import analytic_thread_volume
 from prs_geom.model.design import Nut, PRSDesign, Roller, Screw, default_design
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import din472_sizes
-from prs_geom.pipeline import build
 
 #: The issue's two designs: the default (5 starts, 10 rollers) and a 4-start, 7-roller one in
 #: the standard sizing r_s = (n_s - 2) r_r, r_n = n_n r_r.
@@ -193,18 +192,11 @@ def test_validate_and_build_refuse_up_front(tmp_path):
     assert code == 0 and "warning: mechanism: the axial stack-up" in err and "is valid" in out
 
 
-@pytest.fixture(scope="module")
-def default_build(tmp_path_factory):
-    out = tmp_path_factory.mktemp("mech") / "out"
-    rep = build(default_design(), out, memory_budget=2 ** 34)
-    return rep, out
-
-
 def test_parts_list_read_back(default_build):
     """CSV and XLSX read back: 1 screw, z rollers, 1 nut, 2 carriers, 2 retaining rings;
     each mass is density x volume, and the volumes agree with closed forms within 0.1 %
     (thread volumes: the exact constant-pitch formula; gears: their meshes)."""
-    rep, out = default_build
+    rep, out = default_build.report, default_build.out
     d = default_design()
     lay = layout(d)
     csv_rows = read_parts_list_csv((out / "parts_list.csv").read_text(encoding="utf-8"))
@@ -256,7 +248,7 @@ def test_parts_list_read_back(default_build):
 
 
 def test_build_reports_the_mechanism(default_build):
-    rep, out = default_build
+    rep, out = default_build.report, default_build.out
     sec = rep["mechanism"]
     assert sec["passed"] and all(c["passed"] for c in sec["checks"])
     assert rep["checks"]["interference"]["found"] is False

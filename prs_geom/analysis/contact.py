@@ -56,7 +56,7 @@ from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 
 __all__ = ["PartFlanks", "ContactBatch", "NewtonResult", "solve_collinear", "solve_gap_stationary",
            "euclidean_distance", "part_flanks", "tooth_contacts", "ContactPoint", "contact_point",
-           "TheoreticalScrew", "corrected_screw_profile", "theoretical_screw", "ANGLE_CONVENTIONS", "tooth_gaps",
+           "TheoreticalScrew", "corrected_screw_profile", "theoretical_screw", "tooth_gaps",
            "ContactResult", "analyse_contact"]
 
 TWO_PI = 2.0 * math.pi

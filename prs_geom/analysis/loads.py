@@ -89,7 +89,7 @@ __all__ = ["MEMORY_MB", "LoadBatch", "LoadModel", "LoadResult", "RollerLoadResul
            "hertz_constant",
            "yamamoto_compliance", "sensitivity_chunks", "compliance_model", "ModelRisk", "ModelRiskCase",
            "model_risk", "MODEL_RISK_FRACTIONS", "MIN_MEAN_APPROACH_MM", "MAX_GAP_TO_APPROACH", "mean_approach_mm",
-           "check_load_scale", "MODEL_RISK_NOT_COMPUTED", "design_pitch"]
+           "check_load_scale", "design_pitch"]
 
 
 # --------------------------------------------------------------------------- Hertz

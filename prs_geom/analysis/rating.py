@@ -839,11 +839,21 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
                    robust_note: str | None = None) -> RatingResult:
     """Ratings, life (catalogue and from the tooth loads), limits, efficiency and stiffness.
 
+
     ``contact``/``model``: the contact and load stages' results (computed when not given);
     ``case``: the duty (default :func:`rating_case` of the design); ``equal_lists``: the
     equal-load pitch lists (roller, nut) if known; ``robust_lists``: pitch lists of a robust
     design to compare (the pipeline layer makes them with :func:`prs_geom.studies.robust_pitch`),
     ``robust_note`` says why there are none. All tooth loads come from one batched solve.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> rating = pg.analyse_rating(pg.default_design())
+    >>> round(rating.section["dynamic_load_rating_n"]), round(rating.section["l10_hours"])
+    (56766, 3811)
+    >>> [(c["name"], c["passed"]) for c in rating.section["limits"]["checks"]][-1]
+    ('static_safety', True)
     """
     contact = contact if contact is not None else analyse_contact(design)
     model = model if model is not None else build_model(design, contact)

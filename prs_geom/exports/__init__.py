@@ -9,3 +9,5 @@ page templates in ``templates/``) and the JSON Schema of report.json
 (:mod:`~prs_geom.exports.report_schema`). Exporters read the stage results; they compute
 nothing of their own.
 """
+
+__all__ = []

@@ -66,6 +66,11 @@ from prs_geom.model.design import PRSDesign
 from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
+__all__ = ["PARTS", "LAYERS", "SHEET", "FRAME", "TEXT_H", "TITLE_H", "SCALES", "DETAIL_SCALE", "MAIN_VP",
+           "NOTES", "DETAIL_VP", "TITLE_BLOCK", "ELLIPSE_CHORDS", "DRAWING_PDF", "drawing_name",
+           "part_profiles", "z_range", "section_outlines", "part_datum_mark", "flank_x", "build_drawing",
+           "render_pdf", "write_drawings"]
+
 PARTS = ("screw", "roller", "nut")
 LAYERS = {"OUTLINE": (7, "Continuous", 50), "CENTER": (1, "CENTER", 25), "DIMENSIONS": (3, "Continuous", 25),
           "TEXT": (2, "Continuous", 25), "DETAIL": (7, "Continuous", 50), "TITLE": (7, "Continuous", 35),
@@ -463,7 +468,7 @@ def _sheet_axes_class() -> type:
     ezdxf's matplotlib backend adds every path it draws (hatch lines, outlines, and one patch
     per line of text, holding the Bezier outlines of all its glyphs) with ``Axes.add_patch``,
     which walks the Bezier extrema of each path to grow the data limits: most of the PDF's
-    cost (3.5 of 6 s under the profiler, issue 17). A sheet's view is set explicitly after
+    cost (3.5 of 6 s under the profiler). A sheet's view is set explicitly after
     drawing (the sheet rectangle, ``adjustable="box"``, :func:`_render_pages`; that also
     overrides the autoscaling the backend's ``finalize`` asks for), so the data limits are
     never read; ``add_artist`` attaches the patch exactly as ``add_patch`` does

@@ -31,6 +31,8 @@ from prs_geom.geometry.profiles import ThreadProfiles
 from prs_geom.geometry.primitives import CircleArc, EllipseArc, Segment
 from prs_geom.geometry.sections import axial_section, normal_section
 
+__all__ = ["LAYERS", "TEXT_HEIGHT", "save_dxf", "write_dxf"]
+
 LAYERS = {"PROFILE": (7, "Continuous"), "CENTRE": (1, "CENTER"), "PITCH": (3, "DASHED"),
           "ANNOTATION": (2, "Continuous")}
 TEXT_HEIGHT = 1.2

@@ -37,6 +37,9 @@ from prs_geom.model.design import PRSDesign
 from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
+__all__ = ["MECHANISM_DRAWINGS", "BALLOON_D", "SCALES", "VIEW", "carrier_drawing", "nut_end_drawing",
+           "assembly_drawing", "mechanism_drawings", "write_all_drawings"]
+
 #: Mechanism drawings in sheet order: (key, file name).
 MECHANISM_DRAWINGS = (("carrier", "drawing_carrier.dxf"), ("nut_end", "drawing_nut_end.dxf"),
                       ("assembly", "drawing_assembly.dxf"))

@@ -29,6 +29,9 @@ from numpy.typing import NDArray
 
 from prs_geom.mesh.assembly import Assembly
 
+__all__ = ["stl_records", "stl_bytes", "write_stl_pieces", "write_stl", "stl_header", "rigid_body_pieces",
+           "export_meshes"]
+
 #: Binary STL record: normal, three vertices (float32 LE), attribute byte count.
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 

@@ -71,6 +71,9 @@ from typing import Any
 
 import numpy as np
 
+__all__ = ["DASH", "INF", "TIMES", "GROUP", "MAX_DIGITS", "Quantity", "UNIT_LABELS", "QUANTITIES", "SUFFIXES",
+           "unit_label", "key_label", "quantity", "format_cell", "format_quantity", "exact"]
+
 DASH = "\u2014"          # em dash: no value
 INF = "\u221e"
 TIMES = "\u00d7"

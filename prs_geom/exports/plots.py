@@ -5,7 +5,7 @@ Exporter: takes the numbers of the loads stage (:class:`~prs_geom.analysis.loads
 and of the rating stage, writes files and hands the SVG text on (the HTML report shows it
 inline).
 
-matplotlib is imported on first use, not with this module (about 1 s, issue 17): the rating
+matplotlib is imported on first use, not with this module (it costs about 1 s): the rating
 figure needs none of it but a tick locator and a font file. The figures are
 :class:`matplotlib.figure.Figure` objects made without pyplot (no figure manager to close);
 ``plt`` is still offered, lazily, for callers that draw with pyplot (the harmonic report).
@@ -22,6 +22,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
+
+__all__ = ["save_figure", "plot_detached", "plot_loads", "plot_model_risk", "plot_tolerance", "RATING_LABELS",
+           "plot_rating"]
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure

@@ -144,7 +144,7 @@ def gear_warnings(gears: "GearAnalysis") -> list[str]:
 
 def fe_cache_warnings(cache: Any) -> list[str]:
     """The FE cache's own warnings, and one when the matrices could not be stored
-    (``cache``: a :class:`prs_geom.fe_cache.CachedInfluence`)."""
+    (``cache``: a :class:`prs_geom.analysis.fe.cache.CachedInfluence`)."""
     out = list(cache.warnings)
     if not cache.stored:
         out.append(f"the finite-element influence matrices could not be stored in {cache.folder} (they were "
@@ -209,7 +209,7 @@ def _fe_summary(fe: FeSummary, cache: Mapping[str, Any] | None) -> dict[str, Any
 
 def load_details_dict(details: LoadModelDetails | None, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """``loads.compliances.details``: what the load model was made from. ``cache``: where the
-    FE influence matrices came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`), shown
+    FE influence matrices came from (:meth:`prs_geom.analysis.fe.cache.CachedInfluence.report`), shown
     inside the FE summary."""
     if details is None:
         return {}
@@ -373,7 +373,7 @@ class BuildResults:
 
     ``warnings`` is the build's warning list (the design's sizing warnings first, then each
     stage's, in stage order); ``fe_cache``: where the FE influence matrices of the loads stage
-    came from (:meth:`prs_geom.fe_cache.CachedInfluence.report`; None for the analytic model).
+    came from (:meth:`prs_geom.analysis.fe.cache.CachedInfluence.report`; None for the analytic model).
     """
 
     design: Any

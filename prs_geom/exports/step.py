@@ -596,6 +596,17 @@ def write_step(design: "PRSDesign", path: str | os.PathLike, parts: Sequence[str
     ------
     EnvironmentFailure
         OCP (the optional extra ``step``) is not installed, or the file cannot be written.
+
+    Examples
+    --------
+    The roller as one STEP solid (needs the ``step`` extra, cadquery-ocp):
+
+    >>> import prs_geom as pg
+    >>> info = pg.write_step(pg.default_design(), "roller.step", parts=["roller"])
+    >>> info["written"], info["parts"]["roller"]["valid"]
+    (['roller'], True)
+    >>> abs(info["parts"]["roller"]["volume_mm3"] / info["parts"]["roller"]["analytic_volume_mm3"] - 1) < 1e-6
+    True
     """
     require_ocp()
     for p in parts:

@@ -50,8 +50,17 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from prs_geom.geometry.planar import point_segment_distance
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
 from prs_geom.model.errors import DesignError
+
+__all__ = ["PARTS", "DEFORMATION", "WAVE_GENERATOR_RULE", "POSITION_RULE", "revolution_sections",
+           "circular_spline_mesh", "flexspline_profile", "circular_spline_profile", "flexspline_mesh",
+           "default_position", "meridian_tilt", "tilt_meridian", "deform", "inner_wall_radius",
+           "WaveGenerator", "wave_generator", "wave_generator_mesh", "wave_generator_deviation",
+           "DeformedFlexspline", "deformed_flexspline", "flexspline_deviation", "HarmonicAssembly",
+           "build_assembly", "cone_gap", "arc_cone_clearance", "assembly_checks", "mesh_rows",
+           "assembly_summary"]
 
 #: Names of the placed parts, in scene order.
 PARTS = ("circular_spline", "flexspline", "wave_generator")
@@ -480,14 +489,6 @@ def arc_cone_clearance(d: HarmonicDesign, a: float, theta: ArrayLike) -> NDArray
     return cone_gap(d, np.stack([cr, cz], axis=-1), a) - f.arc_radius_mm
 
 
-def _segment_distance(p: NDArray[np.float64], poly: NDArray[np.float64]) -> float:
-    """Distance (mm) of the point p (2,) from the polyline ``poly`` (m, 2)."""
-    a, b = poly[:-1], poly[1:]
-    ab = b - a
-    t = np.clip(np.einsum("sd,sd->s", p - a, ab) / np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-300), 0, 1)
-    return float(np.min(np.linalg.norm(a + t[:, None] * ab - p, axis=1)))
-
-
 def _manifold(V: NDArray[np.float64], F: NDArray[np.int64]):
     import manifold3d
 
@@ -523,7 +524,8 @@ def assembly_checks(asm: HarmonicAssembly) -> dict[str, Any]:
         inside = (mer[:, 1] >= a) & (mer[:, 1] <= a + c.bore_length_mm)
         gaps.append(float(np.min(cone_gap(d, mer[inside], a))))
     px, pr = contact_point(d, a)
-    offset = _segment_distance(np.array([pr, px]), fs.meridian(0))
+    meridian = fs.meridian(0)
+    offset = float(point_segment_distance(np.array([pr, px]), meridian[:-1], meridian[1:]).min())
     theta = np.linspace(0.0, 2 * math.pi, 721)
     arc_gap = arc_cone_clearance(d, a, theta)
     wg = asm.wave_generator

@@ -38,10 +38,14 @@ from ezdxf import units
 from prs_geom.exports.dxf import save_dxf
 from prs_geom.exports.scene import Material, Scene, SceneMesh, SceneNode
 from prs_geom.exports.textsafe import csv_field, dxf_text, mpl_text
+from prs_geom.geometry.planar import point_segment_distance
 # the parts' undeformed geometry lives with the assembly; these names stay importable from here
 from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
                                         flexspline_mesh, flexspline_profile, revolution_sections)
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
+
+__all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "write_dxf", "ASSEMBLY_MATERIALS",
+           "assembly_scene", "display_colours", "harmonic_outputs"]
 
 
 def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
@@ -51,11 +55,8 @@ def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
     pts = np.concatenate([tri.mean(axis=1), 0.5 * (tri[:, 0] + tri[:, 1]), 0.5 * (tri[:, 1] + tri[:, 2]),
                           0.5 * (tri[:, 2] + tri[:, 0])])
     q = np.column_stack([np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2]])
-    a, b = profile, np.roll(profile, -1, axis=0)
-    ab = b - a
-    t = np.clip(np.einsum("nsd,sd->ns", q[:, None, :] - a[None], ab) / np.einsum("sd,sd->s", ab, ab), 0, 1)
-    foot = a[None] + t[..., None] * ab[None]
-    return float(np.linalg.norm(q[:, None, :] - foot, axis=2).min(axis=1).max())
+    distance = point_segment_distance(q[:, None, :], profile[None], np.roll(profile, -1, axis=0)[None])
+    return float(distance.min(axis=1).max())
 
 
 def ratio_table_csv(table: list[dict[str, Any]]) -> str:

@@ -41,6 +41,11 @@ from scipy import optimize
 from prs_geom.model.validation import check_name, positive, real
 from prs_geom.model.errors import DesignError
 
+__all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "HARMONIC_FIELD_COMMENTS",
+           "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
+           "infinite_ratio_position", "speed_range", "IT_MULTIPLIERS", "IT_STEPS", "it_tolerance_um",
+           "tolerance_for_ratio", "harmonic_report"]
+
 @dataclass(frozen=True)
 class Flexspline:
     neutral_radius_mm: float = 50.0
@@ -130,7 +135,18 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
 @dataclass(frozen=True)
 class HarmonicDesign:
     """A conical-circular-spline harmonic friction drive; defaults = the published worked
-    example (docs/theory/harmonic.md)."""
+    example (docs/theory/harmonic.md).
+
+    Examples
+    --------
+    The worked example's ratio at the axial position a = 73.5 mm:
+
+    >>> import prs_geom as pg
+    >>> from prs_geom.harmonic.model import ratio
+    >>> drive = pg.HarmonicDesign()
+    >>> round(float(ratio(drive, 73.5)), 1)
+    963.6
+    """
 
     #: ``kind`` written in its design files (read back through prs_geom.pipeline.DESIGN_KINDS)
     FILE_KIND: ClassVar[str] = "harmonic"

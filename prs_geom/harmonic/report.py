@@ -32,6 +32,8 @@ from prs_geom.harmonic.assembly import HarmonicAssembly
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.io import design_hash, design_to_dict
 
+__all__ = ["DISPLAY_TOLERANCE_MM", "CUT_PARTS", "scene_payload", "RATIO_COLUMNS", "write_report_html"]
+
 #: Chord tolerance (mm) of the page's display meshes: light enough for a browser.
 DISPLAY_TOLERANCE_MM = 0.1
 #: Parts the 3D view cuts open by the plane through the axis facing the viewer.

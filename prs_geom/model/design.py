@@ -680,6 +680,16 @@ class PRSDesign:
     Construction resolves every defaulted dimension (truncation diameters, roller arc
     radius, screw length) to a number, then checks the cross-part rules. A resolved design
     saved and loaded again compares equal to itself.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> from prs_geom.model.design import Roller
+    >>> design = pg.PRSDesign(name="six-rollers", roller=Roller(count=6))
+    >>> design.roller.count, design.screw.starts, design.thread.pitch_mm
+    (6, 5, 2.0)
+    >>> design.nut.major_diameter_mm    # resolved from the defaults: pitch diameter + 1.6 H
+    40.8
     """
 
     name: str = "default"
@@ -1020,6 +1030,16 @@ class PRSDesign:
 
 def default_design() -> PRSDesign:
     """The built-in standard PRS: 24/8/40 mm pitch diameters, 5 starts, p = 2 mm,
-    10 rollers, 20 engaged teeth, steel, 20 kN, tension-compression."""
+    10 rollers, 20 engaged teeth, steel, 20 kN, tension-compression.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> d = pg.default_design()
+    >>> d.screw.pitch_diameter_mm, d.roller.pitch_diameter_mm, d.nut.pitch_diameter_mm
+    (24.0, 8.0, 40.0)
+    >>> d.screw.starts, d.roller.count, d.loading.axial_load_n
+    (5, 10, 20000.0)
+    """
     return PRSDesign()
 

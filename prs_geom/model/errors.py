@@ -141,7 +141,21 @@ def _short_field(field: str) -> str:
 
 
 class PRSGeomError(Exception):
-    """Base class of all errors raised on purpose by prs_geom."""
+    """Base class of all errors raised on purpose by prs_geom.
+
+    Examples
+    --------
+    Every error the package raises on purpose is one of these, so one ``except`` tells
+    them from a bug:
+
+    >>> import prs_geom as pg
+    >>> from prs_geom.model.design import Roller
+    >>> try:
+    ...     pg.PRSDesign(roller=Roller(count=0))
+    ... except pg.PRSGeomError as err:
+    ...     print(type(err).__name__)
+    DesignError
+    """
 
 
 class DesignError(PRSGeomError, ValueError):
@@ -159,6 +173,16 @@ class DesignError(PRSGeomError, ValueError):
     note : str, optional
         Where the value came from when the user did not write it (a default derived from
         other fields): printed after the value.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> from prs_geom.model.design import Roller
+    >>> try:
+    ...     pg.PRSDesign(roller=Roller(count=0))
+    ... except pg.DesignError as err:
+    ...     print(err.field, err.value, "|", err.rule)
+    count 0 | must be a whole number from 1 to 60
     """
 
     def __init__(self, field: str, value: Any, rule: str, note: str = "") -> None:
@@ -202,11 +226,35 @@ def _rebuild_design_error(field: str, value: Any, rule: str, note: str, args: tu
 
 class OutputRefused(PRSGeomError):
     """An output path holds something prs-geom did not write (exit code 2); nothing was
-    touched."""
+    touched.
+
+    Examples
+    --------
+    >>> import os, prs_geom as pg
+    >>> os.makedirs("notes", exist_ok=True)
+    >>> with open("notes/todo.txt", "w") as f:
+    ...     _ = f.write("mine")
+    >>> try:
+    ...     pg.build(pg.default_design(), "notes")
+    ... except pg.OutputRefused as err:
+    ...     print("refused:", "todo.txt" in str(err))
+    refused: True
+    >>> open("notes/todo.txt").read()
+    'mine'
+    """
 
 
 class ConvergenceError(PRSGeomError, RuntimeError):
-    """A numerical solver did not converge; no numbers are returned."""
+    """A numerical solver did not converge; no numbers are returned.
+
+    Examples
+    --------
+    A caller that wants numbers or nothing catches it like any runtime error:
+
+    >>> import prs_geom as pg
+    >>> issubclass(pg.ConvergenceError, RuntimeError), issubclass(pg.ConvergenceError, pg.PRSGeomError)
+    (True, True)
+    """
 
 
 class EnvironmentFailure(PRSGeomError):
@@ -214,8 +262,33 @@ class EnvironmentFailure(PRSGeomError):
     (permission, disk full, missing folder) or a missing optional extra (exit code 3).
 
     The message names the path (or the extra and its install command) and the reason.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> with open("a-file", "w") as f:
+    ...     _ = f.write("x")
+    >>> try:
+    ...     pg.build(pg.default_design(), "a-file/out")
+    ... except pg.EnvironmentFailure as err:
+    ...     print(str(err).startswith("cannot write"))
+    True
     """
 
 
 class DesignWarning(UserWarning):
-    """A standard-sizing relation of docs/theory/geometry.md is broken (allowed on purpose)."""
+    """A standard-sizing relation of docs/theory/geometry.md is broken (allowed on purpose).
+
+    Examples
+    --------
+    >>> import warnings, prs_geom as pg
+    >>> from prs_geom.model.design import Nut
+    >>> design = pg.PRSDesign(nut=Nut(starts=4))
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     messages = design.warn()
+    >>> [w.category.__name__ for w in caught]
+    ['DesignWarning', 'DesignWarning']
+    >>> messages[1]
+    'screw starts 5 != nut starts 4'
+    """

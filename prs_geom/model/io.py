@@ -529,8 +529,20 @@ def load_design(path: str | Path, kinds: dict[str, type] | None = None) -> PRSDe
 def save_design(design: PRSDesign, path: str | Path, overwrite: bool = False) -> None:
     """Write a design as TOML (``.toml``) or JSON (``.json``), atomically.
 
-    An existing file is refused (:class:`~prs_geom.output.OutputRefused`) unless
+    An existing file is refused (:class:`~prs_geom.model.errors.OutputRefused`) unless
     ``overwrite``.
+
+    Examples
+    --------
+    >>> import prs_geom as pg
+    >>> pg.save_design(pg.default_design(), "design.toml")
+    >>> pg.load_design("design.toml") == pg.default_design()
+    True
+    >>> try:
+    ...     pg.save_design(pg.default_design(), "design.toml")
+    ... except pg.OutputRefused:
+    ...     print("kept")
+    kept
     """
     path = check_output_file(path, force=overwrite)
     text = dumps_json(design) if path.suffix.lower() == ".json" else dumps_toml(design)

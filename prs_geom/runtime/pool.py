@@ -44,7 +44,10 @@ import signal
 import tempfile
 import threading
 import time
+from pathlib import Path
 from typing import Any, Callable
+
+from prs_geom.model.io import write_file_atomic
 
 __all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "worker_init",
            "signals_ignored"]
@@ -161,11 +164,8 @@ class FileProgress:
         if done < total and now - self._last < self.interval:
             return
         self._last = now
-        tmp = f"{self.path}.{os.getpid()}"
         try:
-            with open(tmp, "w", encoding="utf-8") as fh:
-                fh.write(f"{done}\t{total}\t{stage}")
-            os.replace(tmp, self.path)
+            write_file_atomic(Path(self.path), f"{done}\t{total}\t{stage}")
         except OSError:   # progress is a courtesy: never fail the job for it
             pass
 

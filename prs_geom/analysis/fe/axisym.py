@@ -82,7 +82,8 @@ def axisymmetric_stiffness(E: float, nu: float) -> BilinearForm:
 
 @dataclass(frozen=True)
 class AxisymmetricModel:
-    """A meshed axisymmetric body of one isotropic material, assembled and ready to load.
+    """A meshed axisymmetric body of one isotropic material, assembled and ready to load: the
+    stiffness is assembled and the free block factorised on construction.
 
     Parameters
     ----------
@@ -96,8 +97,6 @@ class AxisymmetricModel:
         Supports as (node-set name, component): component 0 holds u_r = 0, 1 holds u_z = 0
         on every node and mid-side node of the set's boundary edges. The node set
         ``"axis"`` (if the mesh has one) always gets u_r = 0.
-
-    The stiffness is assembled and the free block factorised on construction.
     """
 
     mesh: TriangleMesh
