@@ -24,7 +24,7 @@ Python API (``import prs_geom as pg``; see README "Python API")::
     rating = pg.analyse_rating(d)          # load ratings, life, limits, efficiency
     study = pg.tolerance_study(d)          # Monte Carlo under the design's [tolerances]
     robust = pg.robust_pitch(d, spectrum)  # pitch lists for a duty cycle
-    table = pg.sweep(d, rollers=[8, 10])   # a design-space sweep
+    table = pg.design_sweep(d, rollers=[8, 10])  # a design-space sweep
     pg.write_step(d, "parts.step")         # STEP solids (the 'step' extra)
 
 Importing the package is light: every name loads its module on first use, so
@@ -52,7 +52,9 @@ _API: dict[str, tuple[str, str]] = {
     "analyse_rating": ("prs_geom.analysis.rating", "analyse_rating"),
     "tolerance_study": ("prs_geom.studies", "tolerance_study"),
     "robust_pitch": ("prs_geom.studies", "robust_pitch"),
-    "sweep": ("prs_geom.sweep", "sweep"),
+    # not "sweep": that is the name of the submodule prs_geom.sweep, which the import system
+    # binds on the package once imported
+    "design_sweep": ("prs_geom.sweep", "sweep"),
     "write_step": ("prs_geom.exports.step", "write_step"),
     "PRSGeomError": ("prs_geom.model.errors", "PRSGeomError"),
     "DesignError": ("prs_geom.model.errors", "DesignError"),

@@ -668,14 +668,16 @@ def harmonic_stage(ctx: BuildContext) -> None:
                      if dev > tol else []})
     ctx.results.harmonic_meshes = rows
     ctx.results.warnings += check_warnings(rows)
-    from prs_geom.harmonic.exports import harmonic_outputs
+    from prs_geom.harmonic.exports import place_harmonic, write_harmonic_html
 
-    # the placed assembly (wave generator, deformed flexspline), GLB, 3MF and report.html
-    report = report_dict(ctx.results)
-    ctx.results.files += harmonic_outputs(d, ctx.out, report, _build_date(), __version__)
-    # harmonic_outputs writes its sections into the report it is given (the harmonic line's API)
-    ctx.results.harmonic_assembly = report["assembly"]
-    ctx.results.harmonic_assembly_checks = report["checks"]["assembly"]
+    # the placed assembly (wave generator, deformed flexspline), GLB and 3MF, then report.html
+    placed = place_harmonic(d, ctx.out)
+    ctx.results.harmonic_assembly = placed.assembly
+    ctx.results.harmonic_assembly_checks = placed.checks
+    ctx.results.warnings += list(placed.warnings)
+    ctx.results.files += list(placed.files)
+    ctx.results.files.append(write_harmonic_html(d, ctx.out, report_dict(ctx.results), placed, _build_date(),
+                                                 __version__))
 
 
 HARMONIC_STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [

@@ -374,7 +374,7 @@ def sweep(design: PRSDesign, *, starts: Sequence[int] | None = None, rollers: Se
     Examples
     --------
     >>> import prs_geom as pg
-    >>> result = pg.sweep(pg.default_design(), rollers=[8, 10])
+    >>> result = pg.design_sweep(pg.default_design(), rollers=[8, 10])
     >>> [(row["rollers"], round(row["constant_max_ldc"], 3), round(row["graded_max_ldc_100pct"], 3))
     ...  for row in result.rows()]
     [(8, 1.375, 1.0), (10, 1.429, 1.0)]

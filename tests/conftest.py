@@ -86,6 +86,7 @@ def _shared_build(name: str, tmp_path_factory) -> "SharedBuild":
     """
     import fcntl
     import json
+    import pickle
     from pathlib import Path
 
     from prs_geom import pipeline
@@ -96,21 +97,26 @@ def _shared_build(name: str, tmp_path_factory) -> "SharedBuild":
     out = root / f"shared-build-{name}"
     with open(root / f"shared-build-{name}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
-        if not (out / pipeline.REPORT_NAME).is_file():
+        returned_file = root / f"shared-build-{name}.returned.pickle"
+        if not returned_file.is_file():
             example = SHARED_DESIGNS[name]
             design = default_design() if example is None else pipeline.load_any_design(
                 Path(__file__).resolve().parents[1] / "examples" / example)
-            pipeline.build(design, out)
+            returned = pipeline.build(design, out)
+            # the report as build() returned it, types and all, for the tests of that return value
+            returned_file.write_bytes(pickle.dumps(returned))
     report = json.loads((out / pipeline.REPORT_NAME).read_text(encoding="utf-8"))
-    return SharedBuild(out=out, report=report)
+    return SharedBuild(out=out, report=report, returned=pickle.loads(returned_file.read_bytes()))
 
 
 class SharedBuild:
-    """A finished build shared by the tests of one run: its folder and its report.json."""
+    """A finished build shared by the tests of one run: its folder, its report.json and the
+    report ``build()`` returned."""
 
-    def __init__(self, out, report):
+    def __init__(self, out, report, returned):
         self.out = out
         self.report = report
+        self.returned = returned
 
 
 @pytest.fixture(scope="session")

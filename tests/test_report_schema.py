@@ -2,7 +2,7 @@
 2020-12 schema, real reports of both kinds follow it, broken reports do not, and every key a
 real report writes is described.
 
-The default and graded designs are built once for the module (about 15 s each); the
+The default, graded and harmonic designs are the run's shared builds (tests/conftest.py); the
 conftest fixture ``validate_every_build`` checks every other build of the suite."""
 import copy
 import json
@@ -14,36 +14,26 @@ import jsonschema
 import pytest
 
 from prs_geom import pipeline
-from prs_geom.model.design import PRSDesign
 from prs_geom.exports.report import REPORT_FORMAT_VERSION
 from prs_geom.exports.report_schema import load_schema, validate_report
-from prs_geom.pipeline import load_any_design as load_design
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-BUDGET = 4 * 2 ** 30
 #: Open diagnostic objects whose keys the schema does not list.
 OPEN_DIAGNOSTICS = ("$.loads.compliances.details",)
 
 
-def _build(design, out: Path) -> dict:
-    report = pipeline.build(design, out, memory_budget=BUDGET)
-    on_disk = json.loads((out / "report.json").read_text(encoding="utf-8"))
-    return {"returned": report, "disk": on_disk}
+@pytest.fixture(scope="module")
+def default_report(default_build):
+    return {"returned": default_build.returned, "disk": default_build.report}
 
 
 @pytest.fixture(scope="module")
-def default_report(tmp_path_factory):
-    return _build(PRSDesign(), tmp_path_factory.mktemp("schema") / "default")
+def graded_report(graded_build):
+    return {"returned": graded_build.returned, "disk": graded_build.report}
 
 
 @pytest.fixture(scope="module")
-def graded_report(tmp_path_factory):
-    return _build(load_design(EXAMPLES / "graded-pitch.toml"), tmp_path_factory.mktemp("schema") / "graded")
-
-
-@pytest.fixture(scope="module")
-def harmonic_report(tmp_path_factory):
-    return _build(load_design(EXAMPLES / "harmonic.toml"), tmp_path_factory.mktemp("schema") / "harmonic")
+def harmonic_report(harmonic_build):
+    return {"returned": harmonic_build.returned, "disk": harmonic_build.report}
 
 
 @pytest.fixture

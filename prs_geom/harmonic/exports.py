@@ -11,8 +11,9 @@ sampled with half the chordal tolerance as chord sagitta and the revolution with
 other half; the revolution error is measured (:func:`revolve_deviation`) and reported with
 the arc-chord bound.
 
-:func:`harmonic_outputs` writes what the placed assembly adds (the pipeline's harmonic stage
-calls it last): the drive at one input position (:mod:`prs_geom.harmonic.assembly`) as per-part
+:func:`place_harmonic` writes what the placed assembly adds and :func:`write_harmonic_html`
+the page (the pipeline's harmonic stage calls them last; :func:`harmonic_outputs` does both):
+the drive at one input position (:mod:`prs_geom.harmonic.assembly`) as per-part
 STLs of the new parts (``flexspline_placed.stl``: the deformed flexspline in the assembly
 frame; ``wave_generator.stl``: its own frame), ``assembly.glb`` (glTF 2.0, metres, +Y up, one
 named node per part) and ``assembly.3mf`` (millimetres, one object and build item per part),
@@ -27,6 +28,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -45,7 +47,8 @@ from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_pr
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
 
 __all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "write_dxf", "ASSEMBLY_MATERIALS",
-           "assembly_scene", "display_colours", "harmonic_outputs"]
+           "assembly_scene", "display_colours", "HarmonicPlacement", "place_harmonic",
+           "write_harmonic_html", "harmonic_outputs"]
 
 
 def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
@@ -153,48 +156,39 @@ def display_colours() -> dict[str, str]:
     return {k: m.srgb_hex[:7].lower() for k, m in ASSEMBLY_MATERIALS.items()}
 
 
-def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, Any], date: str, version: str,
-                     *, position_mm: float | None = None) -> list[str]:
-    """Place the drive, check it, and write its files; returns the file names written.
+@dataclass(frozen=True)
+class HarmonicPlacement:
+    """What :func:`place_harmonic` placed, checked and wrote.
 
-    Parameters
-    ----------
-    design : HarmonicDesign
-    out_dir : Path
-        Output folder (exists). ``ratio.svg`` is read from it when the harmonic stage wrote
-        it (else the plot is rendered again, to a temporary folder).
-    report : dict
-        The build report holding ``harmonic`` and ``checks.meshes``; this adds
-        ``assembly`` (placement, wave generator, mesh checks of the new parts),
-        ``checks.assembly`` (contact gap, clearances, interference) and, when a check fails
-        its tolerance, lines to ``warnings``.
-    date, version : str
-        Build date (ISO) and prs_geom version, for report.html's provenance.
-    position_mm : float, optional
-        Position a (mm); default the middle of the control range
-        (:func:`prs_geom.harmonic.assembly.default_position`).
-
-    Returns
-    -------
-    list of str
-        ``flexspline_placed.stl``, ``wave_generator.stl``, ``assembly.glb``,
-        ``assembly.3mf``, ``report.html`` (relative to ``out_dir``).
+    ``assembly``: report.json's ``assembly`` section (placement, wave generator, mesh checks
+    of the placed parts); ``checks``: its ``checks.assembly`` section (contact gap,
+    clearances, interference); ``warnings``: one line per check past its tolerance;
+    ``files``: the files written, relative to the output folder; ``assembly_model``: the
+    placed :class:`~prs_geom.harmonic.assembly.HarmonicAssembly`.
     """
-    import tempfile
 
+    assembly: dict[str, Any]
+    checks: dict[str, Any]
+    warnings: tuple[str, ...]
+    files: tuple[str, ...]
+    assembly_model: Any
+
+
+def place_harmonic(design: HarmonicDesign, out_dir: Path, *, position_mm: float | None = None) -> HarmonicPlacement:
+    """Place the drive at ``position_mm`` (mm; default the middle of the control range,
+    :func:`prs_geom.harmonic.assembly.default_position`), check it and write
+    ``flexspline_placed.stl``, ``wave_generator.stl``, ``assembly.glb`` and ``assembly.3mf``
+    into ``out_dir`` (which exists)."""
     from prs_geom.exports.meshes import stl_header, write_stl
     from prs_geom.exports.scene import write_3mf, write_glb
     from prs_geom.harmonic.assembly import assembly_checks, assembly_summary, build_assembly
-    from prs_geom.harmonic.report import DISPLAY_TOLERANCE_MM, write_report_html
     from prs_geom.model.io import design_hash
 
     out = Path(out_dir)
     asm = build_assembly(design, position_mm)
-    report["assembly"] = summary = assembly_summary(asm)
-    report.setdefault("checks", {})["assembly"] = checks = assembly_checks(asm)
-    warnings = report.setdefault("warnings", [])
-    for row in summary["meshes"]:
-        warnings += [f"mesh check ({row['part']}, placed): {w}" for w in row["warnings"]]
+    summary = assembly_summary(asm)
+    checks = assembly_checks(asm)
+    warnings = [f"mesh check ({row['part']}, placed): {w}" for row in summary["meshes"] for w in row["warnings"]]
     warnings += [f"assembly check: {w}" for w in checks["warnings"]]
     h = design_hash(design)
     files = []
@@ -207,6 +201,22 @@ def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, An
     write_glb(scene, out / "assembly.glb")
     write_3mf(scene, out / "assembly.3mf")
     files += ["assembly.glb", "assembly.3mf"]
+    return HarmonicPlacement(assembly=summary, checks=checks, warnings=tuple(warnings), files=tuple(files),
+                             assembly_model=asm)
+
+
+def write_harmonic_html(design: HarmonicDesign, out_dir: Path, report: dict[str, Any], placement: HarmonicPlacement,
+                        date: str, version: str) -> str:
+    """Write ``report.html`` of a harmonic build from its ``report`` (report.json's content)
+    and the placed drive; returns the file name. ``ratio.svg`` is read from ``out_dir``
+    when the harmonic stage wrote it (else the plot is rendered again, to a temporary
+    folder). ``date``, ``version``: build date (ISO) and prs_geom version, for provenance."""
+    import tempfile
+
+    from prs_geom.harmonic.assembly import build_assembly
+    from prs_geom.harmonic.report import DISPLAY_TOLERANCE_MM, write_report_html
+
+    out = Path(out_dir)
     svg = out / "ratio.svg"
     if svg.is_file():
         svg_text = svg.read_text(encoding="utf-8")
@@ -214,7 +224,23 @@ def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, An
         with tempfile.TemporaryDirectory() as tmp:
             plot_ratio(design, Path(tmp))
             svg_text = (Path(tmp) / "ratio.svg").read_text(encoding="utf-8")
+    asm = placement.assembly_model
     view = build_assembly(design, asm.position_mm, max(DISPLAY_TOLERANCE_MM, asm.tolerance_mm))
     write_report_html(out / "report.html", design, report, view, display_colours(), svg_text, date, version)
-    files.append("report.html")
-    return files
+    return "report.html"
+
+
+def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, Any], date: str, version: str,
+                     *, position_mm: float | None = None) -> list[str]:
+    """Place the drive, check it, and write its files into ``out_dir`` (:func:`place_harmonic`
+    and :func:`write_harmonic_html`); returns the file names written.
+
+    ``report`` (the build report holding ``harmonic`` and ``checks.meshes``) gains
+    ``assembly``, ``checks.assembly`` and the warning lines of :class:`HarmonicPlacement`
+    before report.html is written from it.
+    """
+    placed = place_harmonic(design, out_dir, position_mm=position_mm)
+    report["assembly"] = placed.assembly
+    report.setdefault("checks", {})["assembly"] = placed.checks
+    report.setdefault("warnings", []).extend(placed.warnings)
+    return [*placed.files, write_harmonic_html(design, out_dir, report, placed, date, version)]
