@@ -523,10 +523,11 @@ def cmd_rating(args: argparse.Namespace) -> int:
         res = studies.robust_pitch(design, spectrum, tol, samples=samples, contact=contact, model=model,
                                    execution=studies.Execution(workers=1))
         robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
-    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).section
-    from prs_geom.analysis.rating import limit_warnings
+    rating = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note)
+    from prs_geom.exports.report import limit_warnings, rating_section
 
-    failed = limit_warnings(rep["limits"]["checks"])
+    rep = rating_section(rating)
+    failed = limit_warnings(rating.checks)
     if args.json:
         _print_json(rep)
     else:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.inspection import PartInspection
     from prs_geom.analysis.kinematics import Kinematics
     from prs_geom.analysis.machining import MachiningSheet
-    from prs_geom.analysis.rating import RatingResult
+    from prs_geom.analysis.rating import LimitCheck, RatingResult, VariantLife
     from prs_geom.checks.mechanism import MechanismCheck
     from prs_geom.exports.bom import PartsListRow
     from prs_geom.geometry.gears import SpurGear
@@ -34,6 +34,7 @@ __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "
            "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
            "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
            "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
            "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
            "BuildResults", "report_dict"]
 
@@ -154,15 +155,14 @@ def fe_cache_warnings(cache: Any) -> list[str]:
 
 def rating_warnings(rating: "RatingResult") -> list[str]:
     """The build's warnings when the speed or the largest load exceeds its permissible limit."""
-    sec = rating.section
-    lim = sec["limits"]
+    lim = rating.limits
     out = []
-    if not lim["speed_ok"]:
-        out.append(f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
-                   f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
-    if not lim["buckling_ok"]:
-        out.append(f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
-                   f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    if not lim.speed_ok:
+        out.append(f"rating: speed {lim.max_speed_rpm:.6g} rpm exceeds the permissible speed "
+                   f"{lim.permissible_speed_rpm:.6g} rpm (report rating.limits)")
+    if not rating.max_load_n <= lim.permissible_buckling_load_n:
+        out.append(f"rating: largest load {rating.max_load_n:.6g} N exceeds the permissible buckling load "
+                   f"{lim.permissible_buckling_load_n:.6g} N (report rating.limits)")
     return out
 
 
@@ -177,6 +177,117 @@ def mechanism_warnings(m: "MechanismCheck") -> list[str]:
     """The build's warning naming the failed mechanism checks."""
     failed = [name for name, ok in m.checks if not ok]
     return ["mechanism: " + "; ".join(failed) + " failed (report mechanism)"] if failed else []
+
+
+# --------------------------------------------------------------------------- rating
+#: How the ratings are computed, as the ``rating`` section says.
+RATING_METHOD = ("Lundberg-Palmgren point contact per tooth-contact ring (docs/theory/ratings.md): constant "
+                 "calibrated on the closed-form ball-raceway capacity 98.1 (N, mm) of ISO 281 / ISO 3408-5")
+
+#: The sentence of each failed limit check (:data:`prs_geom.analysis.rating.LIMIT_CHECKS`),
+#: ``{v}`` the value and ``{l}`` the limit.
+LIMIT_MESSAGES = {
+    "speed": "speed {v} rpm exceeds the permissible {l} rpm (the smaller of the d n limit and the critical speed "
+             "limit)",
+    "dn": "d n = nominal diameter x speed = {v} mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
+          "{l} mm/min",
+    "critical_speed": "speed {v} rpm exceeds the permissible critical speed {l} rpm (supports.critical_speed_factor "
+                      "x the first whirling speed)",
+    "buckling": "axial load {v} N exceeds the permissible buckling load {l} N (Euler load / "
+                "supports.buckling_safety)",
+    "static_safety": "static safety s0 = C_0a / F_max = {v} is below the required {l} "
+                     "(rating.required_static_safety)",
+}
+
+
+def _plain(x: float) -> str:
+    """A number as an engineer writes it: whole from 1000 up (10000, 13215714), 4 significant
+    digits from 0.001 to 1000, else scientific (4.72e-05)."""
+    if abs(x) >= 1000.0:
+        return f"{x:.0f}"
+    return f"{x:.4g}" if abs(x) >= 1e-3 else f"{x:.3g}"
+
+
+def limit_warnings(checks: "Sequence[LimitCheck]") -> list[str]:
+    """One sentence per failed check, e.g. "speed 10000 rpm exceeds the permissible 6250 rpm
+    (...)"."""
+    return [LIMIT_MESSAGES[c.name].format(v=_plain(c.value), l=_plain(c.limit)) for c in checks if not c.passed]
+
+
+def limit_check_dict(c: "LimitCheck") -> dict[str, Any]:
+    """One entry of ``rating.limits.checks``."""
+    return {"name": c.name, "kind": c.kind, "value": c.value, "limit": c.limit, "unit": c.unit, "margin": c.margin,
+            "passed": c.passed}
+
+
+def _variant_life(v: "VariantLife") -> dict[str, Any]:
+    return {"l10_revolutions": v.l10_revolutions, "l10_hours": v.l10_hours,
+            "life_ratio_to_equal_sharing": v.life_ratio_to_equal_sharing,
+            "max_hertz_pressure_mpa": v.max_hertz_pressure_mpa, "static_safety": v.static_safety,
+            "hertz_pressure_mpa": {"roller_screw": v.pressure_roller_screw_mpa.tolist(),
+                                   "nut_roller": v.pressure_nut_roller_mpa.tolist()},
+            "gain_over_constant_pitch_hours": v.gain_over_constant_pitch_hours,
+            "gain_factor_over_constant_pitch": v.gain_factor_over_constant_pitch}
+
+
+def _rating_limits(r: "RatingResult") -> dict[str, Any]:
+    lim, sup = r.limits, r.supports
+    return {"unsupported_length_mm": lim.free_length_mm, "root_diameter_mm": lim.root_diameter_mm,
+            "critical_speed_ends": sup.critical_speed_ends, "critical_speed_rpm": lim.critical_speed_rpm,
+            "critical_speed_factor": sup.critical_speed_factor,
+            "permissible_critical_speed_rpm": lim.permissible_critical_speed_rpm,
+            "dn_limit_mm_rpm": lim.dn_limit_mm_rpm, "dn_speed_limit_rpm": lim.dn_speed_limit_rpm,
+            "permissible_speed_rpm": lim.permissible_speed_rpm, "max_speed_rpm": lim.max_speed_rpm,
+            "speed_ok": lim.speed_ok, "buckling_ends": sup.buckling_ends, "buckling_load_n": lim.buckling_load_n,
+            "buckling_safety": sup.buckling_safety, "permissible_buckling_load_n": lim.permissible_buckling_load_n,
+            "buckling_ok": bool(r.max_load_n <= lim.permissible_buckling_load_n),
+            "required_static_safety": r.settings.required_static_safety,
+            "checks": [limit_check_dict(c) for c in r.checks], "all_passed": r.all_passed}
+
+
+def _rating_drive(r: "RatingResult") -> dict[str, Any]:
+    lim = r.limits
+    return {**lim.efficiency, "friction_coefficient": r.settings.friction_coefficient, "lead_mm": lim.lead_mm,
+            "torque_load_n": r.max_load_n, "drive_torque_nm": lim.drive_torque_nm,
+            "back_drive_torque_nm": lim.back_drive_torque_nm, "holding_torque_nm": lim.back_drive_torque_nm}
+
+
+def _rating_stiffness(r: "RatingResult") -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``stiffness`` (single nut) and ``double_nut`` entries."""
+    st = r.stiffness
+    single = {"pitch_lists": st.pitch_lists, "load_n": st.load_n.tolist(),
+              "axial_deflection_um": (st.deflection_mm * 1e3).tolist(), "secant_n_per_um": st.secant.tolist(),
+              "tangent_n_per_um": st.tangent.tolist()}
+    double = {"preload_n": st.preload_n, "preload_source": "rating.preload_n" if r.settings.preload_n is not None
+              else "loading.axial_load_n / 2^(3/2)", "lift_off_load_n": float(st.double_nut["lift_off_n"]),
+              "load_n": st.external_n.tolist(), "displacement_um": (st.displacement_mm * 1e3).tolist(),
+              "stiffness_n_per_um": st.double_nut_stiffness.tolist(),
+              "single_nut_displacement_um": (st.single_displacement_mm * 1e3).tolist()}
+    return single, double
+
+
+def rating_section(r: "RatingResult") -> dict[str, Any]:
+    """The ``rating`` section: ratings, catalogue life of the duty, the life of each pitch
+    variant, limits with their checks, efficiency and torques, stiffness single and double nut."""
+    case = r.case
+    stiffness, double = _rating_stiffness(r)
+    return {
+        "method": RATING_METHOD, "dynamic_load_rating_n": r.dynamic_load_rating_n,
+        "static_load_rating_n": r.static_load_rating_n,
+        "static_pressure_limit_mpa": r.settings.static_pressure_limit_mpa, "static_safety": r.static_safety,
+        "max_load_n": r.max_load_n, "equivalent_load_n": case.equivalent_load_n,
+        "equivalent_speed_rpm": case.equivalent_speed_rpm, "operating_factor": case.operating_factor,
+        "reliability_pct": case.reliability_pct, "reliability_factor": r.reliability_factor,
+        "l10_revolutions": r.l10_revolutions, "l10_hours": r.l10_hours, "target_life_hours": case.life_hours,
+        "required_dynamic_load_n": r.required_dynamic_load_n, "duty_source": case.source,
+        "duty_cases": [{"load_n": float(F), "revolution_weight": float(w), "speed_rpm": float(n)}
+                       for F, w, n in zip(case.loads_n, case.weights, case.speeds_rpm)],
+        "rings": r.rings.as_dict(),
+        "calibration": {"constant": r.calibration_constant, "spread_to_closed_form": list(r.calibration_spread)},
+        "distribution_life": {k: _variant_life(v) for k, v in r.distribution_life.items()},
+        "robust": None if r.robust_computed else (r.robust_note or "not computed"),
+        "limits": _rating_limits(r), "efficiency": _rating_drive(r), "stiffness": stiffness, "double_nut": double,
+    }
 
 
 # --------------------------------------------------------------------------- loads
@@ -482,7 +593,7 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
     if results.loads is not None:
         out["model_risk"] = model_risk_section(results.loads.model_risk)
     if results.rating is not None:
-        out["rating"] = results.rating.section
+        out["rating"] = rating_section(results.rating)
     if results.tolerance is not None:
         out["tolerance"] = results.tolerance.section
     if results.meshes is not None:
