@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
 from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, compliance_model
@@ -29,11 +30,13 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.exports.bom import PartsListRow
     from prs_geom.geometry.gears import SpurGear
     from prs_geom.mesh.assembly import Assembly
+    from prs_geom.model.design import Tolerances
 
 __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "MODEL_RISK_NOT_COMPUTED",
            "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
            "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
            "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
            "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
            "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
            "BuildResults", "report_dict"]
@@ -288,6 +291,91 @@ def rating_section(r: "RatingResult") -> dict[str, Any]:
         "robust": None if r.robust_computed else (r.robust_note or "not computed"),
         "limits": _rating_limits(r), "efficiency": _rating_drive(r), "stiffness": stiffness, "double_nut": double,
     }
+
+
+# --------------------------------------------------------------------------- tolerance
+#: What the numbers of the ``tolerance`` section mean.
+TOLERANCE_DEFINITIONS = {
+    "worst_ldc": "per sample: the largest tooth load of any roller, tooth and side, divided by "
+                 "the mean tooth load F / (n z), over every load of the study",
+    "roller_load_share": "load of a roller divided by F / z (1 = equal sharing)",
+    "importance": "variance of the worst coefficient with one error group switched on at a "
+                  "time (same draws), as shares of their sum",
+}
+
+
+def tolerances_dict(t: "Tolerances", n: int) -> dict[str, Any]:
+    """The error model ``t`` as the report writes it, with the per-tooth flank tolerances of n teeth (um)."""
+    d = {k: getattr(t, k) for k in ("distribution", "flank_um", "roller_diameter_um", "screw_eccentricity_um",
+                                    "nut_eccentricity_um", "lead_um", "temperature_k", "source")}
+    per = t.flank_tolerances_um(n)
+    d["per_tooth_flank_um"] = {k: list(v) for k, v in per.items()}
+    if t.target_ldc is not None:
+        d["target_ldc"] = t.target_ldc
+    if t.confidence is not None:
+        d["confidence"] = t.confidence
+    return d
+
+
+def _tolerance_cases(study: Any) -> list[dict[str, Any]]:
+    stats, det, F0 = study.stats, study.deterministic, study.design_load_n
+    return [{"load_fraction": F / F0, "load_N": F,
+             "worst_ldc": tol.summary(stats.worst[i]),
+             "nut_roller": tol.summary(stats.worst_nr[i]),
+             "roller_screw": tol.summary(stats.worst_rs[i]),
+             "roller_load_share_max": tol.summary(stats.share_max[i]),
+             "roller_load_share_min": tol.summary(stats.share_min[i]),
+             "deterministic": {"nut_roller": float(det[i, 0]), "roller_screw": float(det[i, 1]),
+                               "worst_ldc": float(det[i].max())},
+             "samples_with_open_teeth": int((stats.open_teeth[i] > 0).sum())}
+            for i, F in enumerate(study.loads_n)]
+
+
+def tolerance_section(study: Any) -> dict[str, Any]:
+    """The ``tolerance`` section of a :class:`prs_geom.studies.ToleranceStudy`: the error
+    model, the worst coefficient and the roller load shares over the samples, per load and
+    overall, the importance ranking and, with a confidence, the quantile it holds."""
+    stats, F0 = study.stats, study.design_load_n
+    out = {
+        "samples": int(stats.worst.shape[1]), "seed": study.tolerances.seed,
+        "chunk_samples": study.chunk_samples,
+        "tolerances": tolerances_dict(study.tolerances, study.engaged_teeth),
+        "load_fractions": [F / F0 for F in study.loads_n],
+        "worst_ldc": tol.summary(stats.worst.max(axis=0)),
+        "deterministic_worst_ldc": float(study.deterministic.max()),
+        "sides": {"nut_roller": tol.summary(stats.worst_nr.max(axis=0)),
+                  "roller_screw": tol.summary(stats.worst_rs.max(axis=0))},
+        "roller_load_share": {"max": tol.summary(stats.share_max.max(axis=0)),
+                              "min": tol.summary(stats.share_min.min(axis=0))},
+        "cases": _tolerance_cases(study),
+        "importance": study.importance,
+        "definitions": dict(TOLERANCE_DEFINITIONS),
+    }
+    if study.confidence is not None:
+        out["at_confidence"] = {
+            "confidence": study.confidence, "worst_ldc_quantile": study.worst_quantile,
+            "upper_bound_95": study.quantile_upper_bound,
+            "meaning": f"the worst LDC stays below worst_ldc_quantile in a fraction {study.confidence:g} of the "
+                       f"samples; upper_bound_95 bounds that quantile of the population with 95 % "
+                       f"confidence (order statistic; null if the sample is too small)"}
+    return out
+
+
+def synthesis_section(result: Any) -> dict[str, Any]:
+    """A :class:`prs_geom.studies.SynthesisResult` as report.json's ``tolerance.synthesis``
+    (tolerances in um)."""
+    return {"target_ldc": result.target_ldc, "confidence": result.confidence,
+            "confidence_bound": f"one-sided Clopper-Pearson lower bound at {result.bound_level:.0%}",
+            "feasible": result.feasible, "uniform_flank_um": result.uniform_um,
+            "per_tooth_flank_um": {k: list(v) for k, v in result.allocation_um.items()},
+            "influence_ldc_per_um": {k: v.tolist() for k, v in result.influence_per_um.items()},
+            "checks": result.checks}
+
+
+def robust_section(result: Any) -> dict[str, Any]:
+    """A :class:`prs_geom.studies.RobustResult`: the chosen family member and the comparison."""
+    return {"a_nut_roller": result.a_nr, "a_roller_screw": result.a_rs, "evaluations": result.evaluations,
+            **result.comparison}
 
 
 # --------------------------------------------------------------------------- loads
@@ -595,7 +683,7 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
     if results.rating is not None:
         out["rating"] = rating_section(results.rating)
     if results.tolerance is not None:
-        out["tolerance"] = results.tolerance.section
+        out["tolerance"] = tolerance_section(results.tolerance)
     if results.meshes is not None:
         out["assembly"] = assembly_section(results)
     if results.step is not None:
