@@ -18,7 +18,8 @@ import numpy as np
 from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
-from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, compliance_model
+from prs_geom.analysis.loads import (LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, RollerLoadResult,
+                                     compliance_model)
 
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.gears import GearAnalysis
@@ -36,7 +37,7 @@ __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "
            "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
            "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
            "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
-           "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
+           "roller_loads_dict", "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
            "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
            "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
            "BuildResults", "report_dict"]
@@ -291,6 +292,16 @@ def rating_section(r: "RatingResult") -> dict[str, Any]:
         "robust": None if r.robust_computed else (r.robust_note or "not computed"),
         "limits": _rating_limits(r), "efficiency": _rating_drive(r), "stiffness": stiffness, "double_nut": double,
     }
+
+
+def roller_loads_dict(result: RollerLoadResult) -> dict[str, Any]:
+    """One solution of the per-roller solver: load coefficients of the tooth positions (n,)
+    per side, per roller (z, n), roller load shares (z,) and the largest coefficient."""
+    per = result.ldc_per_roller
+    return {"ldc_nut_roller": result.ldc_nr.tolist(), "ldc_roller_screw": result.ldc_rs.tolist(),
+            "ldc_per_roller": {k: v.tolist() for k, v in per.items()},
+            "roller_load_share": result.roller_load_share.tolist(),
+            "max_ldc": float(max(per["nut_roller"].max(), per["roller_screw"].max()))}
 
 
 # --------------------------------------------------------------------------- tolerance
