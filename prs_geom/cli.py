@@ -523,10 +523,11 @@ def cmd_rating(args: argparse.Namespace) -> int:
         res = studies.robust_pitch(design, spectrum, tol, samples=samples, contact=contact, model=model,
                                    execution=studies.Execution(workers=1))
         robust = (res.design.pitch_list("roller"), res.design.pitch_list("nut"))
-    rep = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note).section
-    from prs_geom.analysis.rating import limit_warnings
+    rating = analyse_rating(design, contact, model, case, robust_lists=robust, robust_note=note)
+    from prs_geom.exports.report import limit_warnings, rating_section
 
-    failed = limit_warnings(rep["limits"]["checks"])
+    rep = rating_section(rating)
+    failed = limit_warnings(rating.checks)
     if args.json:
         _print_json(rep)
     else:
@@ -775,10 +776,12 @@ def cmd_tolerance(args: argparse.Namespace) -> int:
     _require_cli_error_model(args, design)
     study = studies.tolerance_study(design, tols, execution=execution, loads_n=loads, confidence=args.confidence,
                                     model=_design_model(design))
+    from prs_geom.exports.report import tolerance_section
+
     if args.json:
-        _print_json(study.section)
+        _print_json(tolerance_section(study))
     else:
-        _print_tolerance_study(design, tols, study.section)
+        _print_tolerance_study(design, tols, tolerance_section(study))
     return EXIT_OK
 
 
@@ -839,8 +842,10 @@ def _tolerance_synthesis(args: argparse.Namespace, design: PRSDesign, tols, load
             f"{res.tolerances.source}")), args.force)
         if not args.json:
             print(f"wrote {args.out}", file=sys.stderr)
+    from prs_geom.exports.report import synthesis_section
+
     if args.json:
-        _print_json({"samples": tols.samples, "seed": tols.seed, "synthesis": res.report()})
+        _print_json({"samples": tols.samples, "seed": tols.seed, "synthesis": synthesis_section(res)})
     else:
         _print_synthesis(res)
     return EXIT_OK if res.feasible else EXIT_FOUND
@@ -874,7 +879,9 @@ def _print_tolerance_study(design: PRSDesign, tols, section: dict) -> None:
 
 
 def _print_synthesis(res) -> None:
-    r = res.report()
+    from prs_geom.exports.report import synthesis_section
+
+    r = synthesis_section(res)
     if not res.feasible:
         print(f"target worst LDC {res.target_ldc:g} with probability {res.confidence:g} cannot be met: "
               f"{r['checks']['reason']}")
@@ -925,7 +932,9 @@ def _design_pitch_robust(args: argparse.Namespace, design: PRSDesign) -> int:
     elif not args.json:
         sys.stdout.write(text)
     if args.json:
-        _print_json(res.report())
+        from prs_geom.exports.report import robust_section
+
+        _print_json(robust_section(res))
     else:
         print("\n".join(lines), file=sys.stderr)
     return EXIT_OK

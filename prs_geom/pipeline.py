@@ -405,7 +405,7 @@ def stage_rating(ctx: BuildContext) -> None:
     ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal,
                                             robust_note=BUILD_ROBUST_NOTE)
     ctx.results.warnings += rating_warnings(r)
-    ctx.add_plot("rating", plot_rating, ctx.out, d.name, r.curves)
+    ctx.add_plot("rating", plot_rating, ctx.out, d.name, r)
 
 
 def stage_tolerance(ctx: BuildContext) -> None:

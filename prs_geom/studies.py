@@ -30,6 +30,7 @@ from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.analysis.loads import LoadModel, build_model, design_pitches, forward, pitch_gaps, with_pitch_lists
 from prs_geom.analysis.robust import PitchFamily, weighted_quantile
+from prs_geom.exports.report import tolerances_dict
 from prs_geom.model.design import FLANK_FIELDS, PRSDesign, Tolerances
 from prs_geom.model.errors import DesignError
 from prs_geom.model.spectrum import Spectrum
@@ -89,14 +90,26 @@ def _run(problem: tol.StudyProblem, samples: int, seed: int, execution: Executio
 class ToleranceStudy:
     """Result of :func:`tolerance_study`. ``stats``: per-sample results (L loads, B samples);
     ``deterministic``: worst coefficients (L, 2) with no error; ``importance``: variance
-    shares of the active term groups; ``section``: the report section."""
+    shares of the active term groups; ``loads_n``: the loads of the study (N), fractions
+    ``load_fractions`` of the design load ``design_load_n`` (N); ``engaged_teeth``: n of the
+    design; ``chunk_samples``: samples per chunk of the draws. With a ``confidence``: the
+    worst coefficient it holds with that probability in the sample (``worst_quantile``) and
+    the Clopper-Pearson upper bound of that quantile at 95 % (``quantile_upper_bound``, None
+    when the sample is too small). :func:`prs_geom.exports.report.tolerance_section`
+    serialises it."""
 
     tolerances: Tolerances
     load_fractions: tuple[float, ...]
     stats: tol.SampleStats
     deterministic: NDArray
     importance: list[dict[str, Any]]
-    section: dict[str, Any]
+    loads_n: NDArray
+    design_load_n: float
+    engaged_teeth: int
+    chunk_samples: int = CHUNK_SAMPLES
+    confidence: float | None = None
+    worst_quantile: float | None = None
+    quantile_upper_bound: float | None = None
 
     @property
     def worst(self) -> NDArray:
@@ -185,74 +198,20 @@ def tolerance_study(design: PRSDesign, tolerances: Tolerances | None = None, *,
                     for r in (forward(design, F, model=model) for F in problem.loads_n)])
     ranking = tol.variance_shares(stats.worst.max(axis=0),
                                   {g: r.worst.max(axis=0) for g, r in zip(groups, results[1:])}) if variants else []
-    section = _study_section(design, tolerances, problem, stats, det, ranking)
-    if confidence is not None:
-        worst = stats.worst.max(axis=0)
-        section["at_confidence"] = {
-            "confidence": confidence,
-            "worst_ldc_quantile": float(np.quantile(worst, confidence)),
-            "upper_bound_95": tol.quantile_upper_bound(worst, confidence, CP_LEVEL),
-            "meaning": f"the worst LDC stays below worst_ldc_quantile in a fraction {confidence:g} of the "
-                       f"samples; upper_bound_95 bounds that quantile of the population with 95 % "
-                       f"confidence (order statistic; null if the sample is too small)"}
-    return ToleranceStudy(tolerances, fractions, stats, det, ranking, section)
-
-
-def _tolerances_dict(t: Tolerances, n: int) -> dict[str, Any]:
-    d = {k: getattr(t, k) for k in ("distribution", "flank_um", "roller_diameter_um", "screw_eccentricity_um",
-                                    "nut_eccentricity_um", "lead_um", "temperature_k", "source")}
-    per = t.flank_tolerances_um(n)
-    d["per_tooth_flank_um"] = {k: list(v) for k, v in per.items()}
-    if t.target_ldc is not None:
-        d["target_ldc"] = t.target_ldc
-    if t.confidence is not None:
-        d["confidence"] = t.confidence
-    return d
-
-
-def _study_section(design: PRSDesign, t: Tolerances, problem: tol.StudyProblem, stats: tol.SampleStats,
-                   det: NDArray, ranking: list[dict[str, Any]]) -> dict[str, Any]:
-    F0 = design.loading.axial_load_n
-    cases = []
-    for i, F in enumerate(problem.loads_n):
-        cases.append({
-            "load_fraction": F / F0, "load_N": F,
-            "worst_ldc": tol.summary(stats.worst[i]),
-            "nut_roller": tol.summary(stats.worst_nr[i]),
-            "roller_screw": tol.summary(stats.worst_rs[i]),
-            "roller_load_share_max": tol.summary(stats.share_max[i]),
-            "roller_load_share_min": tol.summary(stats.share_min[i]),
-            "deterministic": {"nut_roller": float(det[i, 0]), "roller_screw": float(det[i, 1]),
-                              "worst_ldc": float(det[i].max())},
-            "samples_with_open_teeth": int((stats.open_teeth[i] > 0).sum()),
-        })
-    return {
-        "samples": int(stats.worst.shape[1]), "seed": t.seed,
-        "chunk_samples": CHUNK_SAMPLES,
-        "tolerances": _tolerances_dict(t, design.thread.engaged_teeth),
-        "load_fractions": [F / F0 for F in problem.loads_n],
-        "worst_ldc": tol.summary(stats.worst.max(axis=0)),
-        "deterministic_worst_ldc": float(det.max()),
-        "sides": {"nut_roller": tol.summary(stats.worst_nr.max(axis=0)),
-                  "roller_screw": tol.summary(stats.worst_rs.max(axis=0))},
-        "roller_load_share": {"max": tol.summary(stats.share_max.max(axis=0)),
-                              "min": tol.summary(stats.share_min.min(axis=0))},
-        "cases": cases,
-        "importance": ranking,
-        "definitions": {
-            "worst_ldc": "per sample: the largest tooth load of any roller, tooth and side, divided by "
-                         "the mean tooth load F / (n z), over every load of the study",
-            "roller_load_share": "load of a roller divided by F / z (1 = equal sharing)",
-            "importance": "variance of the worst coefficient with one error group switched on at a "
-                          "time (same draws), as shares of their sum",
-        },
-    }
+    worst = stats.worst.max(axis=0)
+    return ToleranceStudy(
+        tolerances=tolerances, load_fractions=fractions, stats=stats, deterministic=det, importance=ranking,
+        loads_n=problem.loads_n, design_load_n=F0, engaged_teeth=design.thread.engaged_teeth,
+        confidence=confidence, worst_quantile=None if confidence is None else float(np.quantile(worst, confidence)),
+        quantile_upper_bound=None if confidence is None else tol.quantile_upper_bound(worst, confidence, CP_LEVEL))
 
 
 # --------------------------------------------------------------------------- synthesis
 @dataclass(frozen=True)
 class SynthesisResult:
-    """Result of :func:`synthesise` (tolerances in um)."""
+    """Result of :func:`synthesise` (tolerances in um; ``bound_level``: level of the one-sided
+    Clopper-Pearson bound of the success fraction).
+    :func:`prs_geom.exports.report.synthesis_section` serialises it."""
 
     target_ldc: float
     confidence: float
@@ -262,15 +221,7 @@ class SynthesisResult:
     influence_per_um: dict[str, NDArray]
     checks: dict[str, Any]
     tolerances: Tolerances | None
-
-    def report(self) -> dict[str, Any]:
-        """The synthesis as a JSON-ready dict (report.json's ``tolerance.synthesis``, tolerances in um)."""
-        return {"target_ldc": self.target_ldc, "confidence": self.confidence,
-                "confidence_bound": f"one-sided Clopper-Pearson lower bound at {CP_LEVEL:.0%}",
-                "feasible": self.feasible, "uniform_flank_um": self.uniform_um,
-                "per_tooth_flank_um": {k: list(v) for k, v in self.allocation_um.items()},
-                "influence_ldc_per_um": {k: v.tolist() for k, v in self.influence_per_um.items()},
-                "checks": self.checks}
+    bound_level: float = CP_LEVEL
 
 
 def _success(problem: tol.StudyProblem, samples: int, seed: int, execution: Execution, target: float,
@@ -465,18 +416,14 @@ def _robust_eval(task: _RobustTask) -> NDArray:
 @dataclass(frozen=True)
 class RobustResult:
     """Result of :func:`robust_pitch`: the chosen member (a_nr, a_rs), its pitch lists and
-    the comparison of constant, equal-at-design-load and robust on the same samples."""
+    the comparison of constant, equal-at-design-load and robust on the same samples.
+    :func:`prs_geom.exports.report.robust_section` serialises it."""
 
     a_nr: float
     a_rs: float
     design: PRSDesign
     comparison: dict[str, Any]
     evaluations: int
-
-    def report(self) -> dict[str, Any]:
-        """The chosen family member and the comparison as a JSON-ready dict."""
-        return {"a_nut_roller": self.a_nr, "a_roller_screw": self.a_rs, "evaluations": self.evaluations,
-                **self.comparison}
 
 
 def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances | None = None, *,
@@ -545,7 +492,7 @@ def robust_pitch(design: PRSDesign, spectrum: Spectrum, tolerances: Tolerances |
         "objective": f"{quantile:g} quantile of the worst LDC over the spectrum (weighted by "
                      f"{spectrum.weighting}) and {samples} error samples (seed {seed})",
         "quantile": quantile, "samples": samples, "seed": seed, "spectrum": spectrum.as_dict(),
-        "tolerances": _tolerances_dict(tolerances, design.thread.engaged_teeth),
+        "tolerances": tolerances_dict(tolerances, design.thread.engaged_teeth),
         "constant_pitch": describe((0.0, 0.0)),
         "equal_at_design_load": describe((1.0, 1.0)),
         "robust": describe((a_nr, a_rs)),

@@ -255,15 +255,16 @@ def test_a_small_design_still_builds_at_the_bounds(tmp_path):
     """The smallest accepted load and preload and the shortest free length give finite
     ratings (the bounds are inside what the analysis handles)."""
     from prs_geom.analysis.rating import analyse_rating
+    from prs_geom.exports.report import rating_section
     from prs_geom.model.design import Loading, RatingSettings, Supports
 
     d = default_design().with_changes(loading=Loading(axial_load_n=1.0), rating=RatingSettings(preload_n=1e10),
                                       supports=Supports(unsupported_length_mm=0.01))
-    sec = analyse_rating(d).section
+    sec = rating_section(analyse_rating(d))
     json.loads(json.dumps(sec), parse_constant=_no_constant)
     d = PRSDesign(thread=Thread(engaged_teeth=3), roller=Roller(count=3), mesh=MeshSettings(chord_tolerance_mm=0.05),
                   loading=Loading(axial_load_n=1e10), rating=RatingSettings(preload_n=1.0, speed_rpm=0.01))
-    json.loads(json.dumps(analyse_rating(d).section), parse_constant=_no_constant)
+    json.loads(json.dumps(rating_section(analyse_rating(d))), parse_constant=_no_constant)
 
 
 def test_a_target_without_its_confidence_reaches_the_machining_sheets():

@@ -23,6 +23,7 @@ from cli_helpers import run
 from prs_geom.analysis import rating as R
 from prs_geom.analysis.contact import analyse_contact
 from prs_geom.analysis.loads import build_model, design_pitches, gap_terms, pitch_gaps, solve_loads_batch
+from prs_geom.exports.report import limit_check_dict, limit_warnings, rating_section
 from prs_geom.exports.report_schema import load_schema
 from prs_geom.model.design import Loading, PRSDesign, RatingSettings, Supports, Thread
 from prs_geom.model.errors import DesignError
@@ -131,7 +132,7 @@ def test_general_form_reproduces_the_closed_form_ball_capacity():
 
 def test_ratings_of_the_default_design(default_rating):
     d, c, m, res = default_rating
-    s = res.section
+    s = rating_section(res)
     rings = R.contact_rings(d, c, m)
     # cycles per screw turn from the carrier speed w_c = w_s r_s / (r_s + r_n) = 0.375 w_s (DOMAIN 9)
     assert rings.cycles == pytest.approx((10 * 0.625, 0.375 * 5, 0.375 * 5, 10 * 0.375))
@@ -152,14 +153,14 @@ def test_equal_sharing_gives_back_the_catalogue_life(default_rating):
     for F in (5_000.0, 20_000.0, 35_000.0):
         f = np.full(d.thread.engaged_teeth, F / (d.thread.engaged_teeth * d.roller.count))
         assert float(R.system_life(rings, f, f)) == pytest.approx((Ca / F) ** 3, rel=1e-12)
-    eq = res.section["distribution_life"]["equal_load"]
+    eq = rating_section(res)["distribution_life"]["equal_load"]
     assert eq["life_ratio_to_equal_sharing"] == pytest.approx(1.0, abs=1e-9)
 
 
 def test_static_rating_puts_the_limit_pressure_on_the_contacts(default_rating):
     d, c, m, res = default_rating
     rings = R.contact_rings(d, c, m)
-    C0a = res.section["static_load_rating_n"]
+    C0a = rating_section(res)["static_load_rating_n"]
     f = np.full(d.thread.engaged_teeth, C0a / (d.thread.engaged_teeth * d.roller.count))
     p = max(R.hertz_pressure(rings, 0, f).max(), R.hertz_pressure(rings, 1, f).max())
     assert p == pytest.approx(4200.0, rel=1e-12)
@@ -211,7 +212,7 @@ def test_equal_sharing_never_shorter_on_sampled_designs(d):
 
 
 def test_graded_example_reports_its_life_gain():
-    res = R.analyse_rating(load_any_design(EXAMPLES / "graded-pitch.toml")).section
+    res = rating_section(R.analyse_rating(load_any_design(EXAMPLES / "graded-pitch.toml")))
     dl = res["distribution_life"]
     assert set(dl) == {"constant_pitch", "equal_load"}      # its lists are the equal-load design
     assert dl["equal_load"]["gain_over_constant_pitch_hours"] > 0
@@ -275,7 +276,7 @@ def test_double_nut_loses_a_hertzian_preload_at_2_83_times_the_preload():
 
 def test_double_nut_and_stiffness_of_the_default_design(default_rating):
     d, *_, res = default_rating
-    st_, dn = res.section["stiffness"], res.section["double_nut"]
+    st_, dn = rating_section(res)["stiffness"], rating_section(res)["double_nut"]
     assert np.all(np.diff(st_["axial_deflection_um"]) > 0)
     assert np.all(np.diff(st_["secant_n_per_um"]) > 0)              # Hertz stiffens with load
     assert dn["preload_n"] == pytest.approx(d.loading.axial_load_n / 2 ** 1.5)
@@ -287,7 +288,7 @@ def test_double_nut_and_stiffness_of_the_default_design(default_rating):
 def test_limits_use_the_supports_section():
     d = PRSDesign(supports=Supports(unsupported_length_mm=800.0, critical_speed_ends="supported-supported",
                                     buckling_ends="fixed-free", buckling_safety=3.0))
-    lim = R.analyse_rating(d).section["limits"]
+    lim = rating_section(R.analyse_rating(d))["limits"]
     droot = d.screw.minor_diameter_mm
     assert lim["critical_speed_rpm"] == pytest.approx(
         R.critical_speed(droot, 800.0, "supported-supported", d.materials.screw.youngs_modulus_mpa))
@@ -343,7 +344,7 @@ def test_catalogue_cross_check(name):
     for teeth, ca_band, c0a_band in ((20, (0.50, 0.60), (0.44, 0.58)), (40, (0.80, 0.97), (0.88, 1.16))):
         d = catalogue_design(screw_d, teeth)
         assert d.roller.count == 10
-        res = R.analyse_rating(d).section
+        res = rating_section(R.analyse_rating(d))
         ca = res["dynamic_load_rating_n"] / 1e3 / ca_kn
         c0a = res["static_load_rating_n"] / 1e3 / c0a_kn
         assert ca_band[0] <= ca <= ca_band[1], (teeth, ca)
@@ -440,7 +441,7 @@ def _validator_for(path: str):
 def test_rating_section_follows_the_report_schema(default_rating):
     *_, res = default_rating
     v = _validator_for("$defs/prs_report/properties/rating")
-    section = json.loads(json.dumps(res.section))
+    section = json.loads(json.dumps(rating_section(res)))
     v.validate(section)
     broken = json.loads(json.dumps(section))
     broken["dynamic_load_rating_n"] = "57 kN"
@@ -470,7 +471,7 @@ def test_rating_figure_files(default_rating, tmp_path):
 
     *_, res = default_rating
     svgs: dict[str, str] = {}
-    assert plot_rating(tmp_path, "default", res.curves, svgs) == ["rating.png", "rating.svg"]
+    assert plot_rating(tmp_path, "default", res, svgs) == ["rating.png", "rating.svg"]
     doc = xml.dom.minidom.parseString(svgs["rating"])
     assert doc.documentElement.tagName == "svg"
     assert (tmp_path / "rating.svg").read_text(encoding="utf-8") == svgs["rating"]
@@ -478,7 +479,7 @@ def test_rating_figure_files(default_rating, tmp_path):
     with Image.open(tmp_path / "rating.png") as im:
         assert im.size == (1500, 470)
     first = (tmp_path / "rating.png").read_bytes()
-    plot_rating(tmp_path, "default", res.curves)
+    plot_rating(tmp_path, "default", res)
     assert (tmp_path / "rating.png").read_bytes() == first
 
 
@@ -512,7 +513,7 @@ def _by_hand_limits():
 
 def test_limit_checks_of_the_default_design(default_rating):
     d, *_, res = default_rating
-    lim = res.section["limits"]
+    lim = rating_section(res)["limits"]
     checks = {c["name"]: c for c in lim["checks"]}
     assert [c["name"] for c in lim["checks"]] == ["speed", "dn", "critical_speed", "buckling", "static_safety"]
     hand = _by_hand_limits()
@@ -521,7 +522,7 @@ def test_limit_checks_of_the_default_design(default_rating):
     assert checks["speed"]["limit"] == 6250.0 and lim["permissible_speed_rpm"] == 6250.0   # d n governs
     # the duty: the design load 20 kN at rating.speed_rpm 100 rpm, nominal diameter 24 mm
     values = {"speed": 100.0, "dn": 2400.0, "critical_speed": 100.0, "buckling": 20_000.0,
-              "static_safety": res.section["static_load_rating_n"] / 20_000.0}
+              "static_safety": rating_section(res)["static_load_rating_n"] / 20_000.0}
     units = {"speed": "rpm", "dn": "mm/min", "critical_speed": "rpm", "buckling": "N", "static_safety": "-"}
     for name, c in checks.items():
         assert c["value"] == pytest.approx(values[name], rel=1e-12) and c["unit"] == units[name]
@@ -541,13 +542,13 @@ def test_speed_check_flips_at_the_permissible_speed():
 
     def speed_check(n):
         res = R.analyse_rating(d, c, m, R.rating_case(d, speed_rpm=n))
-        return {k["name"]: k for k in res.section["limits"]["checks"]}
+        return {k.name: k for k in res.checks}
 
     at, above = speed_check(6250.0), speed_check(6250.0 * (1 + 1e-9))
-    assert at["speed"]["passed"] and at["speed"]["margin"] == 0.0 and at["dn"]["passed"]
-    assert not above["speed"]["passed"] and above["speed"]["margin"] < 0 and not above["dn"]["passed"]
-    assert above["critical_speed"]["passed"]             # the whirling limit is 1.5e6 rpm here
-    assert R.limit_warnings(list(above.values())) == [
+    assert at["speed"].passed and at["speed"].margin == 0.0 and at["dn"].passed
+    assert not above["speed"].passed and above["speed"].margin < 0 and not above["dn"].passed
+    assert above["critical_speed"].passed             # the whirling limit is 1.5e6 rpm here
+    assert limit_warnings(list(above.values())) == [
         "speed 6250 rpm exceeds the permissible 6250 rpm (the smaller of the d n limit and the critical speed "
         "limit)",
         "d n = nominal diameter x speed = 150000 mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
@@ -557,13 +558,13 @@ def test_speed_check_flips_at_the_permissible_speed():
 def test_static_safety_and_buckling_fail_under_an_absurd_load(default_rating):
     d, c, m, res0 = default_rating
     res = R.analyse_rating(d, c, m, R.rating_case(d, mean_load_n=2e9))
-    checks = {k["name"]: k for k in res.section["limits"]["checks"]}
-    C0a = res0.section["static_load_rating_n"]
+    checks = {k["name"]: k for k in rating_section(res)["limits"]["checks"]}
+    C0a = rating_section(res0)["static_load_rating_n"]
     assert checks["static_safety"]["value"] == pytest.approx(C0a / 2e9, rel=1e-12)
     assert checks["static_safety"]["value"] == pytest.approx(4.7e-5, rel=0.01)
     assert not checks["static_safety"]["passed"] and not checks["buckling"]["passed"]
     assert checks["buckling"]["margin"] == pytest.approx(_by_hand_limits()["buckling"] / 2e9 - 1, rel=1e-9)
-    assert checks["speed"]["passed"] and res.section["limits"]["all_passed"] is False
+    assert checks["speed"]["passed"] and rating_section(res)["limits"]["all_passed"] is False
 
 
 def test_required_static_safety_moves_the_verdict(default_rating):
@@ -571,15 +572,15 @@ def test_required_static_safety_moves_the_verdict(default_rating):
     value with vibration or impact)."""
     d, c, m, _ = default_rating
     strict = PRSDesign(rating=RatingSettings(required_static_safety=5.0))
-    ch = {k["name"]: k for k in R.analyse_rating(strict, c, m).section["limits"]["checks"]}["static_safety"]
+    ch = {k["name"]: k for k in rating_section(R.analyse_rating(strict, c, m))["limits"]["checks"]}["static_safety"]
     assert ch["limit"] == 5.0 and not ch["passed"] and ch["margin"] == pytest.approx(ch["value"] / 5.0 - 1)
 
 
 def test_limit_check_margins_and_equality():
-    up = R.limit_check("speed", 100.0, 6250.0)
+    up = limit_check_dict(R.limit_check("speed", 100.0, 6250.0))
     assert up == {"name": "speed", "kind": "upper", "value": 100.0, "limit": 6250.0, "unit": "rpm",
                   "margin": 61.5, "passed": True}
-    assert R.limit_check("buckling", 4.0, 2.0)["margin"] == -0.5            # twice the limit
+    assert R.limit_check("buckling", 4.0, 2.0).margin == -0.5            # twice the limit
     lo = R.limit_check("static_safety", 1.0, 2.0)
-    assert lo["margin"] == -0.5 and lo["passed"] is False and lo["kind"] == "lower"
-    assert R.limit_check("static_safety", 2.0, 2.0)["passed"] and R.limit_check("dn", 5.0, 5.0)["passed"]
+    assert lo.margin == -0.5 and lo.passed is False and lo.kind == "lower"
+    assert R.limit_check("static_safety", 2.0, 2.0).passed and R.limit_check("dn", 5.0, 5.0).passed

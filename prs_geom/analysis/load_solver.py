@@ -1288,14 +1288,6 @@ class RollerLoadResult:
     def axial_deflection_mm(self) -> NDArray | float:
         return self.approach_nr_mm[..., 0] + self.approach_rs_mm[..., 0]
 
-    def report(self) -> dict[str, Any]:
-        """Report fields of one solution: coefficients (n,), per roller (z, n), shares (z,)."""
-        per = self.ldc_per_roller
-        return {"ldc_nut_roller": self.ldc_nr.tolist(), "ldc_roller_screw": self.ldc_rs.tolist(),
-                "ldc_per_roller": {k: v.tolist() for k, v in per.items()},
-                "roller_load_share": self.roller_load_share.tolist(),
-                "max_ldc": float(max(per["nut_roller"].max(), per["roller_screw"].max()))}
-
 
 def _failed(res: _Solution, what: str) -> None:
     """Raise :class:`ConvergenceError` if a sample of ``res`` has no checked solution."""

@@ -91,8 +91,9 @@ __all__ = ["LP_C", "LP_H", "WEIBULL_E", "LP_BALL_CONSTANT", "A1_TABLE", "END_CAS
            "lp_stress_functions", "ring_capacity", "lp_ball_raceway_capacity", "general_ball_raceway_capacity",
            "calibration_constant", "calibration_spread", "ContactRings", "contact_rings", "dynamic_load_rating",
            "static_load_rating", "system_life", "hertz_pressure", "efficiency", "drive_torque", "critical_speed",
-           "buckling_load", "double_nut", "LIMIT_CHECKS", "limit_check", "limit_checks", "limit_warnings",
-           "RatingCase", "rating_case", "RatingResult", "analyse_rating", "CURVE_FRACTIONS"]
+           "buckling_load", "double_nut", "LIMIT_CHECKS", "LimitCheck", "limit_check", "limit_checks",
+           "RatingCase", "rating_case", "VariantLife", "RatingStiffness", "RatingLimits", "RatingCurves",
+           "RatingResult", "analyse_rating", "CURVE_FRACTIONS"]
 
 #: Lundberg-Palmgren exponents of point contact: stress c, depth h, Weibull slope e; they
 #: give the load-life exponent (c - h + 2) / (3 e) = 3.
@@ -455,56 +456,46 @@ LIMIT_CHECKS: dict[str, tuple[str, str, str]] = {
 }
 
 
-def limit_check(name: str, value: float, limit: float) -> dict[str, Any]:
-    """One entry of ``rating.limits.checks``: ``{name, kind, value, limit, unit, margin,
-    passed}`` with the margin of :data:`LIMIT_CHECKS` (upper: limit / value - 1, lower:
-    value / limit - 1); ``passed`` when the margin is >= 0 (the value may equal the limit)."""
+@dataclass(frozen=True)
+class LimitCheck:
+    """One limit check of :data:`LIMIT_CHECKS`: ``value`` against ``limit`` (both in ``unit``),
+    ``kind`` "upper" or "lower", ``margin`` (upper: limit / value - 1, lower: value / limit - 1)
+    and ``passed`` when the value does not cross the limit (it may equal it)."""
+
+    name: str
+    kind: str
+    value: float
+    limit: float
+    unit: str
+    margin: float
+    passed: bool
+
+    def __post_init__(self) -> None:
+        if self.name not in LIMIT_CHECKS or self.kind != LIMIT_CHECKS[self.name][0]:
+            raise ValueError(f"limit check {self.name!r} of kind {self.kind!r} is not one of LIMIT_CHECKS")
+
+
+def limit_check(name: str, value: float, limit: float) -> LimitCheck:
+    """The check ``name`` of :data:`LIMIT_CHECKS` of ``value`` against ``limit``, with its margin
+    (upper: limit / value - 1, lower: value / limit - 1); passed when the margin is >= 0 (the
+    value may equal the limit)."""
     kind, unit, _ = LIMIT_CHECKS[name]
     value, limit = float(value), float(limit)
     margin = limit / value - 1.0 if kind == "upper" else value / limit - 1.0
     passed = value <= limit if kind == "upper" else value >= limit
-    return {"name": name, "kind": kind, "value": value, "limit": limit, "unit": unit, "margin": margin,
-            "passed": bool(passed)}
+    return LimitCheck(name=name, kind=kind, value=value, limit=limit, unit=unit, margin=margin, passed=bool(passed))
 
 
-def limit_checks(limits: dict[str, Any], max_load_n: float, static_safety: float, required_static_safety: float,
-                 nominal_diameter_mm: float) -> list[dict[str, Any]]:
-    """The five checks of ``rating.limits`` (:data:`LIMIT_CHECKS`) from its numbers."""
-    n = limits["max_speed_rpm"]
-    return [limit_check("speed", n, limits["permissible_speed_rpm"]),
-            limit_check("dn", nominal_diameter_mm * n, limits["dn_limit_mm_rpm"]),
-            limit_check("critical_speed", n, limits["permissible_critical_speed_rpm"]),
-            limit_check("buckling", max_load_n, limits["permissible_buckling_load_n"]),
-            limit_check("static_safety", static_safety, required_static_safety)]
-
-
-_FAIL_TEXT = {
-    "speed": "speed {v} rpm exceeds the permissible {l} rpm (the smaller of the d n limit and the critical speed "
-             "limit)",
-    "dn": "d n = nominal diameter x speed = {v} mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
-          "{l} mm/min",
-    "critical_speed": "speed {v} rpm exceeds the permissible critical speed {l} rpm (supports.critical_speed_factor "
-                      "x the first whirling speed)",
-    "buckling": "axial load {v} N exceeds the permissible buckling load {l} N (Euler load / "
-                "supports.buckling_safety)",
-    "static_safety": "static safety s0 = C_0a / F_max = {v} is below the required {l} "
-                     "(rating.required_static_safety)",
-}
-
-
-def _plain(x: float) -> str:
-    """A number as an engineer writes it: whole from 1000 up (10000, 13215714), 4 significant
-    digits from 0.001 to 1000, else scientific (4.72e-05)."""
-    if abs(x) >= 1000.0:
-        return f"{x:.0f}"
-    return f"{x:.4g}" if abs(x) >= 1e-3 else f"{x:.3g}"
-
-
-def limit_warnings(checks: Sequence[dict[str, Any]]) -> list[str]:
-    """One sentence per failed check, e.g. "speed 10000 rpm exceeds the permissible 6250 rpm
-    (...)"."""
-    return [_FAIL_TEXT[c["name"]].format(v=_plain(c["value"]), l=_plain(c["limit"])) for c in checks
-            if not c["passed"]]
+def limit_checks(limits: "RatingLimits", max_load_n: float, static_safety: float, required_static_safety: float,
+                 nominal_diameter_mm: float) -> tuple[LimitCheck, ...]:
+    """The five checks of :data:`LIMIT_CHECKS`, in its order, at the largest duty speed
+    (``limits.max_speed_rpm``) and the largest duty load ``max_load_n`` (N)."""
+    n = limits.max_speed_rpm
+    return (limit_check("speed", n, limits.permissible_speed_rpm),
+            limit_check("dn", nominal_diameter_mm * n, limits.dn_limit_mm_rpm),
+            limit_check("critical_speed", n, limits.permissible_critical_speed_rpm),
+            limit_check("buckling", max_load_n, limits.permissible_buckling_load_n),
+            limit_check("static_safety", static_safety, required_static_safety))
 
 
 # --------------------------------------------------------------------------- the analysis
@@ -593,15 +584,6 @@ def rating_case(design: PRSDesign, spectrum: Spectrum | None = None, mean_load_n
         ", speed from " + ("--speed-rpm" if speed_rpm is not None else "rating.speed_rpm")
     return RatingCase((F,), (1.0,), (n,), F, n, float(fw), float(R), float(H), src,
                       "--mean-load" if mean_load_n is not None else "loading.axial_load_n")
-
-
-@dataclass(frozen=True)
-class RatingResult:
-    """The ratings of a design: ``section`` (the ``rating`` section of report.json) and the
-    curves the plots draw (``curves``: per-tooth pressures, life and stiffness over load)."""
-
-    section: dict[str, Any]
-    curves: dict[str, Any] = field(default_factory=dict, compare=False)
 
 
 def _variants(design: PRSDesign, model: LoadModel, equal_lists: tuple[Sequence[float], Sequence[float]] | None,
@@ -696,12 +678,30 @@ def _solve_variants(design: PRSDesign, model: LoadModel, case: RatingCase,
 
 
 @dataclass(frozen=True)
-class _DistributionLife:
-    """Per variant: life, pressures and static safety at the duty (``dist``, the report's
-    ``distribution_life`` entries), the system life at the curve loads ``life_curve`` (V, K)
-    (revolutions) and the largest duty load ``max_load_n`` (N)."""
+class VariantLife:
+    """The life of one pitch variant from its tooth loads: L10 (revolutions and h at the
+    equivalent speed), its ratio to the catalogue life of equal sharing, the Hertz pressure per
+    tooth at the largest duty load (MPa; ``pressure_roller_screw_mpa``,
+    ``pressure_nut_roller_mpa``, tooth 1 the loaded end) with its maximum, the static safety
+    (p_lim / p_max)^3 and the gain over constant pitch (h, and as a factor)."""
 
-    dist: dict[str, dict[str, Any]]
+    l10_revolutions: float
+    l10_hours: float
+    life_ratio_to_equal_sharing: float
+    max_hertz_pressure_mpa: float
+    static_safety: float
+    pressure_roller_screw_mpa: NDArray
+    pressure_nut_roller_mpa: NDArray
+    gain_over_constant_pitch_hours: float
+    gain_factor_over_constant_pitch: float
+
+
+@dataclass(frozen=True)
+class _DistributionLife:
+    """Per variant its :class:`VariantLife` (``dist``), the system life at the curve loads
+    ``life_curve`` (V, K) (revolutions) and the largest duty load ``max_load_n`` (N)."""
+
+    dist: dict[str, VariantLife]
     life_curve: NDArray
     max_load_n: float
 
@@ -721,30 +721,30 @@ def _distribution_life(design: PRSDesign, case: RatingCase, rs: RatingSettings, 
     n_m = case.equivalent_speed_rpm
     k_max = int(np.argmax(cases))
     low = int(np.argmin(cases))
-    dist = {}
+    hours = [life_hours(float(life_dist[i]), n_m) for i in range(len(names))]
+    # static check at the largest load of the duty, as catalogues do (no f_w)
+    pressures = [(hertz_pressure(rings, 0, f_rs[i, k_max]), hertz_pressure(rings, 1, f_nr[i, k_max]))
+                 for i in range(len(names))]
+    p_max = [float(max(p_rs.max(), p_nr.max())) for p_rs, p_nr in pressures]
+    safety = [(rs.static_pressure_limit_mpa / p) ** 3 for p in p_max]
     for i, k in enumerate(names):
-        # static check at the largest load of the duty, as catalogues do (no f_w)
-        p_rs = hertz_pressure(rings, 0, f_rs[i, k_max])
-        p_nr = hertz_pressure(rings, 1, f_nr[i, k_max])
-        p_max = float(max(p_rs.max(), p_nr.max()))
-        dist[k] = {"l10_revolutions": float(life_dist[i]), "l10_hours": life_hours(float(life_dist[i]), n_m),
-                   "life_ratio_to_equal_sharing": float(life_dist[i] / cap.life_revolutions),
-                   "max_hertz_pressure_mpa": p_max,
-                   "static_safety": (rs.static_pressure_limit_mpa / p_max) ** 3,
-                   "hertz_pressure_mpa": {"roller_screw": p_rs.tolist(), "nut_roller": p_nr.tolist()}}
-    for k in names:
-        for key in ("l10_revolutions", "l10_hours", "static_safety"):
-            _finite(dist[k][key], case.load_field, float(cases[low]) if case.load_field != "loading.axial_load_n"
-                    else F0, f"gives a {key} of {dist[k][key]!r} ({k} pitch lists) out of floating-point range")
-    const_h = dist["constant_pitch"]["l10_hours"]
-    for k in names:
-        dist[k]["gain_over_constant_pitch_hours"] = dist[k]["l10_hours"] - const_h
-        dist[k]["gain_factor_over_constant_pitch"] = dist[k]["l10_hours"] / const_h
+        for key, value in (("l10_revolutions", float(life_dist[i])), ("l10_hours", hours[i]),
+                           ("static_safety", safety[i])):
+            _finite(value, case.load_field, float(cases[low]) if case.load_field != "loading.axial_load_n"
+                    else F0, f"gives a {key} of {value!r} ({k} pitch lists) out of floating-point range")
+    const_h = hours[names.index("constant_pitch")]
+    dist = {k: VariantLife(l10_revolutions=float(life_dist[i]), l10_hours=hours[i],
+                           life_ratio_to_equal_sharing=float(life_dist[i] / cap.life_revolutions),
+                           max_hertz_pressure_mpa=p_max[i], static_safety=safety[i],
+                           pressure_roller_screw_mpa=pressures[i][0], pressure_nut_roller_mpa=pressures[i][1],
+                           gain_over_constant_pitch_hours=hours[i] - const_h,
+                           gain_factor_over_constant_pitch=hours[i] / const_h)
+            for i, k in enumerate(names)}
     return _DistributionLife(dist=dist, life_curve=life_curve, max_load_n=float(cases[k_max]))
 
 
 @dataclass(frozen=True)
-class _Stiffness:
+class RatingStiffness:
     """Axial stiffness of the design as built (pitch lists ``pitch_lists``): single nut at the
     curve loads ``load_n`` (N) with displacement ``deflection_mm``, secant and tangent
     stiffness (N/um); preloaded double nut (:func:`double_nut` result ``double_nut``) at the
@@ -766,7 +766,7 @@ class _Stiffness:
 
 
 def _stiffness(design: PRSDesign, model: LoadModel, rs: RatingSettings,
-               variants: dict[str, tuple[NDArray, NDArray]], solved: _VariantLoads) -> _Stiffness:
+               variants: dict[str, tuple[NDArray, NDArray]], solved: _VariantLoads) -> RatingStiffness:
     """Stiffness of the design as built (its own lists: constant pitch unless graded), single
     and with a preloaded double nut."""
     F0 = design.loading.axial_load_n
@@ -788,31 +788,43 @@ def _stiffness(design: PRSDesign, model: LoadModel, rs: RatingSettings,
     ext = np.linspace(0.0, 1.5 * F0, 61)
     dn = double_nut(Fg, dg, preload, ext)
     x = dn["displacement_mm"]
-    return _Stiffness(pitch_lists=own, load_n=Fc, deflection_mm=dc, secant=Fc / dc / 1e3,
+    return RatingStiffness(pitch_lists=own, load_n=Fc, deflection_mm=dc, secant=Fc / dc / 1e3,
                       tangent=np.gradient(Fc, dc) / 1e3, preload_n=preload, double_nut=dn, external_n=ext,
                       displacement_mm=x, double_nut_stiffness=np.gradient(ext, x) / 1e3,
                       single_displacement_mm=PchipInterpolator(np.cbrt(Fg) ** 2, dg)(np.cbrt(ext) ** 2))
 
 
 @dataclass(frozen=True)
-class _Limits:
+class RatingLimits:
     """Speed and buckling limits and the drive: free screw length and root diameter (mm),
-    critical speed, d n speed limit and permissible speed (rpm), buckling load (N), lead
-    (mm), :func:`efficiency` result, drive and back-drive torque at the largest load (N m)."""
+    critical speed (first whirling speed), its permissible fraction, d n speed limit and the
+    permissible speed (the smaller of both) at the largest duty speed ``max_speed_rpm`` (rpm);
+    Euler buckling load and the permissible load (N), the d n limit (mm/min), lead (mm),
+    :func:`efficiency` result, drive and back-drive torque at the largest load (N m)."""
 
     free_length_mm: float
     root_diameter_mm: float
     critical_speed_rpm: float
+    permissible_critical_speed_rpm: float
     buckling_load_n: float
+    permissible_buckling_load_n: float
+    dn_limit_mm_rpm: float
     dn_speed_limit_rpm: float
     permissible_speed_rpm: float
+    max_speed_rpm: float
     lead_mm: float
     efficiency: dict[str, float]
     drive_torque_nm: float
     back_drive_torque_nm: float
 
+    @property
+    def speed_ok(self) -> bool:
+        """The largest duty speed is within the permissible speed."""
+        return bool(self.max_speed_rpm <= self.permissible_speed_rpm)
 
-def _limits(design: PRSDesign, rs: RatingSettings, sup: Supports, max_load_n: float) -> _Limits:
+
+def _limits(design: PRSDesign, rs: RatingSettings, sup: Supports, max_load_n: float,
+            max_speed_rpm: float) -> RatingLimits:
     """Critical speed, buckling, speed limits, efficiency and torques."""
     E_s = design.materials.screw.youngs_modulus_mpa
     d_root = design.screw.minor_diameter_mm
@@ -827,10 +839,72 @@ def _limits(design: PRSDesign, rs: RatingSettings, sup: Supports, max_load_n: fl
     lead = design.screw.starts * design.thread.pitch_mm
     eff = efficiency(lead, design.screw.pitch_diameter_mm, rs.friction_coefficient, design.thread.beta)
     T_back = max_load_n * lead * eff["back_driving"] / (2.0 * math.pi) / 1e3
-    return _Limits(free_length_mm=L_free, root_diameter_mm=d_root, critical_speed_rpm=n_cr,
-                   buckling_load_n=F_buck, dn_speed_limit_rpm=n_dn, permissible_speed_rpm=n_perm, lead_mm=lead,
-                   efficiency=eff, drive_torque_nm=drive_torque(max_load_n, lead, eff["forward"]),
-                   back_drive_torque_nm=T_back)
+    return RatingLimits(free_length_mm=L_free, root_diameter_mm=d_root, critical_speed_rpm=n_cr,
+                        permissible_critical_speed_rpm=sup.critical_speed_factor * n_cr, buckling_load_n=F_buck,
+                        permissible_buckling_load_n=F_buck / sup.buckling_safety, dn_limit_mm_rpm=rs.dn_limit_mm_rpm,
+                        dn_speed_limit_rpm=n_dn, permissible_speed_rpm=n_perm, max_speed_rpm=max_speed_rpm,
+                        lead_mm=lead, efficiency=eff, drive_torque_nm=drive_torque(max_load_n, lead, eff["forward"]),
+                        back_drive_torque_nm=T_back)
+
+
+@dataclass(frozen=True)
+class RatingCurves:
+    """What the rating plot draws besides the stiffness: the variants ``names``, the curve
+    loads ``curve_loads_n`` (``fractions`` of the design load, N) with the L10 life of each
+    variant ``life_hours`` (h) and the catalogue life (C_a / F)^3 ``catalogue_life_hours``
+    (h), and the Hertz pressure per tooth ``pressure`` (variant -> (roller-screw, nut-roller),
+    MPa) at the largest duty load ``pressure_load_n`` (N) against ``pressure_limit_mpa``."""
+
+    names: tuple[str, ...]
+    fractions: tuple[float, ...]
+    curve_loads_n: NDArray
+    life_hours: dict[str, NDArray]
+    catalogue_life_hours: NDArray
+    pressure: dict[str, tuple[NDArray, NDArray]]
+    pressure_load_n: float
+    pressure_limit_mpa: float
+
+
+@dataclass(frozen=True)
+class RatingResult:
+    """The ratings of a design under the duty ``case`` with the design's rating ``settings``
+    and ``supports``: basic dynamic and static axial load ratings of the contact ``rings``
+    (N), the reliability factor a_1, the catalogue L10 life (revolutions, h at the equivalent
+    speed) and the C_a it would need for the target life (N), the static safety C_0a / F_max
+    at the largest duty load ``max_load_n`` (N), the calibration constant K of the capacity
+    and the spread of the closed form around it; the life of each pitch variant from its tooth
+    loads (``distribution_life``; ``robust_computed`` when a robust design is among them, else
+    ``robust_note`` may say why not), the speed and buckling limits and the drive
+    (``limits``), the five limit ``checks`` (:data:`LIMIT_CHECKS` order), the stiffness of the
+    design as built and the plot ``curves``. :func:`prs_geom.exports.report.rating_section`
+    serialises it."""
+
+    case: RatingCase
+    settings: RatingSettings
+    supports: Supports
+    rings: ContactRings
+    dynamic_load_rating_n: float
+    static_load_rating_n: float
+    reliability_factor: float
+    l10_revolutions: float
+    l10_hours: float
+    required_dynamic_load_n: float
+    max_load_n: float
+    static_safety: float
+    calibration_constant: float
+    calibration_spread: tuple[float, float]
+    distribution_life: dict[str, VariantLife]
+    robust_computed: bool
+    robust_note: str | None
+    limits: RatingLimits
+    checks: tuple[LimitCheck, ...]
+    stiffness: RatingStiffness
+    curves: RatingCurves = field(compare=False)
+
+    @property
+    def all_passed(self) -> bool:
+        """Every limit check passed."""
+        return all(c.passed for c in self.checks)
 
 
 def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, model: LoadModel | None = None,
@@ -850,9 +924,9 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     --------
     >>> import prs_geom as pg
     >>> rating = pg.analyse_rating(pg.default_design())
-    >>> round(rating.section["dynamic_load_rating_n"]), round(rating.section["l10_hours"])
+    >>> round(rating.dynamic_load_rating_n), round(rating.l10_hours)
     (56766, 3811)
-    >>> [(c["name"], c["passed"]) for c in rating.section["limits"]["checks"]][-1]
+    >>> [(c.name, c.passed) for c in rating.checks][-1]
     ('static_safety', True)
     """
     contact = contact if contact is not None else analyse_contact(design)
@@ -865,80 +939,31 @@ def analyse_rating(design: PRSDesign, contact: ContactResult | None = None, mode
     solved = _solve_variants(design, model, case, variants)
     life = _distribution_life(design, case, rs, cap, solved)
     stiff = _stiffness(design, model, rs, variants, solved)
-    limits = _limits(design, rs, sup, life.max_load_n)
+    limits = _limits(design, rs, sup, life.max_load_n, max(case.speeds_rpm))
     return _rating_result(design, case, rs, sup, cap, solved, life, stiff, limits, robust_note)
 
 
 def _rating_result(design: PRSDesign, case: RatingCase, rs: RatingSettings, sup: Supports, cap: _Capacity,
-                   solved: _VariantLoads, life: _DistributionLife, stiff: _Stiffness, limits: _Limits,
+                   solved: _VariantLoads, life: _DistributionLife, stiff: RatingStiffness, limits: RatingLimits,
                    robust_note: str | None) -> RatingResult:
-    """The ``rating`` section of report.json and the plot curves from the computed steps."""
-    rings, Ca, C0a, a1, fw, L_rev = (cap.rings, cap.dynamic_n, cap.static_n, cap.reliability_factor,
-                                     cap.operating_factor, cap.life_revolutions)
-    names, cases, curve, w = solved.names, solved.duty_loads_n, solved.curve_loads_n, np.asarray(case.weights)
-    dist, life_curve, Fmax, n_m = life.dist, life.life_curve, life.max_load_n, case.equivalent_speed_rpm
-    own, Fc, dc, sec, tan, preload = (stiff.pitch_lists, stiff.load_n, stiff.deflection_mm, stiff.secant,
-                                      stiff.tangent, stiff.preload_n)
-    dn, ext, x, k_dn, single_x = (stiff.double_nut, stiff.external_n, stiff.displacement_mm,
-                                  stiff.double_nut_stiffness, stiff.single_displacement_mm)
-    L_free, d_root, n_cr, F_buck, n_dn, n_perm = (limits.free_length_mm, limits.root_diameter_mm,
-                                                  limits.critical_speed_rpm, limits.buckling_load_n,
-                                                  limits.dn_speed_limit_rpm, limits.permissible_speed_rpm)
-    eff, lead, T_drive, T_back = limits.efficiency, limits.lead_mm, limits.drive_torque_nm, limits.back_drive_torque_nm
-    section = {
-        "method": ("Lundberg-Palmgren point contact per tooth-contact ring (docs/theory/ratings.md): constant "
-                   "calibrated on the closed-form ball-raceway capacity 98.1 (N, mm) of ISO 281 / ISO 3408-5"),
-        "dynamic_load_rating_n": Ca,
-        "static_load_rating_n": C0a,
-        "static_pressure_limit_mpa": rs.static_pressure_limit_mpa,
-        "static_safety": C0a / Fmax,
-        "max_load_n": Fmax,
-        "equivalent_load_n": case.equivalent_load_n,
-        "equivalent_speed_rpm": n_m,
-        "operating_factor": fw,
-        "reliability_pct": case.reliability_pct,
-        "reliability_factor": a1,
-        "l10_revolutions": L_rev,
-        "l10_hours": life_hours(L_rev, n_m),
-        "target_life_hours": case.life_hours,
-        "required_dynamic_load_n": required_dynamic_load(case.equivalent_load_n, n_m, case.life_hours, a1, fw),
-        "duty_source": case.source,
-        "duty_cases": [{"load_n": float(F), "revolution_weight": float(wi), "speed_rpm": float(n)}
-                       for F, wi, n in zip(cases, w, case.speeds_rpm)],
-        "rings": rings.as_dict(),
-        "calibration": {"constant": calibration_constant(), "spread_to_closed_form": list(calibration_spread())},
-        "distribution_life": dist,
-        "robust": None if "robust" in names else (robust_note or "not computed"),
-        "limits": {
-            "unsupported_length_mm": L_free, "root_diameter_mm": d_root,
-            "critical_speed_ends": sup.critical_speed_ends, "critical_speed_rpm": n_cr,
-            "critical_speed_factor": sup.critical_speed_factor,
-            "permissible_critical_speed_rpm": sup.critical_speed_factor * n_cr,
-            "dn_limit_mm_rpm": rs.dn_limit_mm_rpm, "dn_speed_limit_rpm": n_dn,
-            "permissible_speed_rpm": n_perm, "max_speed_rpm": max(case.speeds_rpm),
-            "speed_ok": bool(max(case.speeds_rpm) <= n_perm),
-            "buckling_ends": sup.buckling_ends, "buckling_load_n": F_buck, "buckling_safety": sup.buckling_safety,
-            "permissible_buckling_load_n": F_buck / sup.buckling_safety,
-            "buckling_ok": bool(Fmax <= F_buck / sup.buckling_safety),
-            "required_static_safety": rs.required_static_safety,
-        },
-        "efficiency": {**{k: v for k, v in eff.items()}, "friction_coefficient": rs.friction_coefficient,
-                       "lead_mm": lead, "torque_load_n": Fmax, "drive_torque_nm": T_drive,
-                       "back_drive_torque_nm": T_back, "holding_torque_nm": T_back},
-        "stiffness": {"pitch_lists": own, "load_n": Fc.tolist(), "axial_deflection_um": (dc * 1e3).tolist(),
-                      "secant_n_per_um": sec.tolist(), "tangent_n_per_um": tan.tolist()},
-        "double_nut": {"preload_n": preload, "preload_source": "rating.preload_n" if rs.preload_n is not None
-                       else "loading.axial_load_n / 2^(3/2)", "lift_off_load_n": float(dn["lift_off_n"]),
-                       "load_n": ext.tolist(), "displacement_um": (x * 1e3).tolist(),
-                       "stiffness_n_per_um": k_dn.tolist(), "single_nut_displacement_um": (single_x * 1e3).tolist()},
-    }
-    lim = section["limits"]
-    lim["checks"] = limit_checks(lim, Fmax, C0a / Fmax, rs.required_static_safety, design.screw.pitch_diameter_mm)
-    lim["all_passed"] = all(c["passed"] for c in lim["checks"])
-    curves = {"names": names, "fractions": list(CURVE_FRACTIONS), "curve_loads_n": curve,
-              "life_hours": {k: life_curve[i] / (60.0 * n_m) for i, k in enumerate(names)},
-              "pressure": {k: dist[k]["hertz_pressure_mpa"] for k in names}, "pressure_load_n": Fmax,
-              "pressure_limit_mpa": rs.static_pressure_limit_mpa, "stiffness": section["stiffness"],
-              "double_nut": section["double_nut"], "catalogue_life_hours":
-              life_revolutions(Ca, 1.0, a1, fw) / curve ** 3 / (60.0 * n_m)}
-    return RatingResult(section, curves)
+    """The result and the plot curves from the computed steps."""
+    names, curve, n_m, Fmax = solved.names, solved.curve_loads_n, case.equivalent_speed_rpm, life.max_load_n
+    static_safety = cap.static_n / Fmax
+    curves = RatingCurves(
+        names=tuple(names), fractions=tuple(CURVE_FRACTIONS), curve_loads_n=curve,
+        life_hours={k: life.life_curve[i] / (60.0 * n_m) for i, k in enumerate(names)},
+        catalogue_life_hours=life_revolutions(cap.dynamic_n, 1.0, cap.reliability_factor, cap.operating_factor)
+        / curve ** 3 / (60.0 * n_m),
+        pressure={k: (v.pressure_roller_screw_mpa, v.pressure_nut_roller_mpa) for k, v in life.dist.items()},
+        pressure_load_n=Fmax, pressure_limit_mpa=rs.static_pressure_limit_mpa)
+    return RatingResult(
+        case=case, settings=rs, supports=sup, rings=cap.rings, dynamic_load_rating_n=cap.dynamic_n,
+        static_load_rating_n=cap.static_n, reliability_factor=cap.reliability_factor,
+        l10_revolutions=cap.life_revolutions, l10_hours=life_hours(cap.life_revolutions, n_m),
+        required_dynamic_load_n=required_dynamic_load(case.equivalent_load_n, n_m, case.life_hours,
+                                                      cap.reliability_factor, cap.operating_factor),
+        max_load_n=Fmax, static_safety=static_safety, calibration_constant=calibration_constant(),
+        calibration_spread=tuple(calibration_spread()), distribution_life=life.dist,
+        robust_computed="robust" in names, robust_note=robust_note, limits=limits,
+        checks=limit_checks(limits, Fmax, static_safety, rs.required_static_safety, design.screw.pitch_diameter_mm),
+        stiffness=stiff, curves=curves)

@@ -41,7 +41,8 @@ from prs_geom.analysis.loads import LoadModel, LoadsResult, compliance_model
 from prs_geom.analysis.machining import COLUMNS, MachiningSheet
 from prs_geom.exports.numbers import exact, format_cell, format_quantity, key_label, unit_label
 from prs_geom.exports.report import (MODEL_RISK_NOT_COMPUTED, BuildResults, contact_section, gears_section,
-                                     inspection_section, loads_section, mechanism_section)
+                                     inspection_section, loads_section, mechanism_section, rating_section,
+                                     tolerance_section)
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.io import design_hash, design_to_dict
@@ -735,9 +736,9 @@ def _analysis_html(results: BuildResults, svgs: dict[str, str]) -> list[str]:
     if results.loads is not None:
         parts += _loads_html(results.loads, svgs, results.fe_cache)
     if results.rating is not None:
-        parts.append(_rating_html(results.rating.section, svgs))
+        parts.append(_rating_html(rating_section(results.rating), svgs))
     if results.tolerance is not None:
-        parts.append(_tolerance_html(results.tolerance.section, svgs))
+        parts.append(_tolerance_html(tolerance_section(results.tolerance), svgs))
     checks = _checks_shown(results)
     if checks is not None:
         parts.append(_checks_html(checks, results.contact))

@@ -30,6 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from prs_geom.analysis.loads import ModelRisk
+    from prs_geom.analysis.rating import RatingResult
 
 
 @functools.cache
@@ -450,35 +451,33 @@ def _draw_panel(cv: _Canvas, p: _Panel, x0: float, y0: float, w: float, h: float
         cv.text(x0 + w - 170, yy, s.label, 9.5, "lm")
 
 
-def plot_rating(out: Path, name: str, curves: dict[str, Any], svgs: dict[str, str] | None = None) -> list[str]:
-    """``rating.png`` and ``rating.svg``: three panels from
-    :attr:`prs_geom.analysis.rating.RatingResult.curves`: L10 life (h) against the axial load
+def plot_rating(out: Path, name: str, rating: "RatingResult", svgs: dict[str, str] | None = None) -> list[str]:
+    """``rating.png`` and ``rating.svg``: three panels from ``rating``
+    (:class:`prs_geom.analysis.rating.RatingResult`, its curves and stiffness): L10 life (h) against the axial load
     for each pitch variant beside the catalogue life (C_a / F)^3 (log scale); axial stiffness
     of the nut against load, single (secant, tangent) and preloaded double nut (dotted: the
     load at which the preload is lost); maximum Hertz pressure per tooth at the largest duty
     load, constant pitch against the graded variants (screw side solid, nut side dashed).
     Drawn by the light renderer above, not matplotlib (cost)."""
-    F = np.asarray(curves["curve_loads_n"]) / 1e3
-    life = [_Series(F, np.asarray(curves["catalogue_life_hours"]), "#000000", "dot", "catalogue (C_a / F)^3")]
+    curves, st = rating.curves, rating.stiffness
+    F = np.asarray(curves.curve_loads_n) / 1e3
+    life = [_Series(F, np.asarray(curves.catalogue_life_hours), "#000000", "dot", "catalogue (C_a / F)^3")]
     life += [_Series(F, np.asarray(v), _COLOURS[i], "", RATING_LABELS.get(k, k))
-             for i, (k, v) in enumerate(curves["life_hours"].items())]
-    st, dn = curves["stiffness"], curves["double_nut"]
-    stiff = (_Series(np.asarray(st["load_n"]) / 1e3, np.asarray(st["secant_n_per_um"]), _COLOURS[0], "",
-                     "single nut, secant"),
-             _Series(np.asarray(st["load_n"]) / 1e3, np.asarray(st["tangent_n_per_um"]), _COLOURS[0], "dash",
-                     "single nut, tangent"),
-             _Series(np.asarray(dn["load_n"]) / 1e3, np.asarray(dn["stiffness_n_per_um"]), _COLOURS[1], "",
-                     f"double nut, preload {dn['preload_n'] / 1e3:.3g} kN"))
+             for i, (k, v) in enumerate(curves.life_hours.items())]
+    stiff = (_Series(st.load_n / 1e3, st.secant, _COLOURS[0], "", "single nut, secant"),
+             _Series(st.load_n / 1e3, st.tangent, _COLOURS[0], "dash", "single nut, tangent"),
+             _Series(st.external_n / 1e3, st.double_nut_stiffness, _COLOURS[1], "",
+                     f"double nut, preload {st.preload_n / 1e3:.3g} kN"))
     press = []
-    for i, (k, p) in enumerate(curves["pressure"].items()):
-        teeth = np.arange(1, len(p["roller_screw"]) + 1, dtype=np.float64)
-        press.append(_Series(teeth, np.asarray(p["roller_screw"]), _COLOURS[i], "", RATING_LABELS.get(k, k)))
-        press.append(_Series(teeth, np.asarray(p["nut_roller"]), _COLOURS[i], "dash"))
+    for i, (k, (p_rs, p_nr)) in enumerate(curves.pressure.items()):
+        teeth = np.arange(1, len(p_rs) + 1, dtype=np.float64)
+        press.append(_Series(teeth, np.asarray(p_rs), _COLOURS[i], "", RATING_LABELS.get(k, k)))
+        press.append(_Series(teeth, np.asarray(p_nr), _COLOURS[i], "dash"))
     panels = (
         _Panel("life from the tooth loads", "axial load (kN)", "L10 life (h)", tuple(life), logy=True),
         _Panel("axial stiffness (dotted: preload lost)", "axial load (kN)", "stiffness (N/um)", stiff, ymin=0.0,
-               vline=dn["lift_off_load_n"] / 1e3, legend="lower right"),
-        _Panel(f"max Hertz pressure at {curves['pressure_load_n'] / 1e3:.4g} kN (nut side dashed)",
+               vline=float(st.double_nut["lift_off_n"]) / 1e3, legend="lower right"),
+        _Panel(f"max Hertz pressure at {curves.pressure_load_n / 1e3:.4g} kN (nut side dashed)",
                "tooth (1 = loaded end)", "pressure (MPa)", tuple(press)))
     cv = _Canvas(1500, 470)
     cv.text(750, 14, f"{name}: ratings", 13, "mt")

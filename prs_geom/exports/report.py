@@ -11,29 +11,34 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
-from prs_geom.analysis.loads import LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, compliance_model
+from prs_geom.analysis.loads import (LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, RollerLoadResult,
+                                     compliance_model)
 
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.analysis.gears import GearAnalysis
     from prs_geom.analysis.inspection import PartInspection
     from prs_geom.analysis.kinematics import Kinematics
     from prs_geom.analysis.machining import MachiningSheet
-    from prs_geom.analysis.rating import RatingResult
+    from prs_geom.analysis.rating import LimitCheck, RatingResult, VariantLife
     from prs_geom.checks.mechanism import MechanismCheck
     from prs_geom.exports.bom import PartsListRow
     from prs_geom.geometry.gears import SpurGear
     from prs_geom.mesh.assembly import Assembly
+    from prs_geom.model.design import Tolerances
 
 __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "MODEL_RISK_NOT_COMPUTED",
            "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
            "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
            "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "roller_loads_dict", "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
+           "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
            "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
            "BuildResults", "report_dict"]
 
@@ -154,15 +159,14 @@ def fe_cache_warnings(cache: Any) -> list[str]:
 
 def rating_warnings(rating: "RatingResult") -> list[str]:
     """The build's warnings when the speed or the largest load exceeds its permissible limit."""
-    sec = rating.section
-    lim = sec["limits"]
+    lim = rating.limits
     out = []
-    if not lim["speed_ok"]:
-        out.append(f"rating: speed {lim['max_speed_rpm']:.6g} rpm exceeds the permissible speed "
-                   f"{lim['permissible_speed_rpm']:.6g} rpm (report rating.limits)")
-    if not lim["buckling_ok"]:
-        out.append(f"rating: largest load {sec['max_load_n']:.6g} N exceeds the permissible buckling load "
-                   f"{lim['permissible_buckling_load_n']:.6g} N (report rating.limits)")
+    if not lim.speed_ok:
+        out.append(f"rating: speed {lim.max_speed_rpm:.6g} rpm exceeds the permissible speed "
+                   f"{lim.permissible_speed_rpm:.6g} rpm (report rating.limits)")
+    if not rating.max_load_n <= lim.permissible_buckling_load_n:
+        out.append(f"rating: largest load {rating.max_load_n:.6g} N exceeds the permissible buckling load "
+                   f"{lim.permissible_buckling_load_n:.6g} N (report rating.limits)")
     return out
 
 
@@ -177,6 +181,212 @@ def mechanism_warnings(m: "MechanismCheck") -> list[str]:
     """The build's warning naming the failed mechanism checks."""
     failed = [name for name, ok in m.checks if not ok]
     return ["mechanism: " + "; ".join(failed) + " failed (report mechanism)"] if failed else []
+
+
+# --------------------------------------------------------------------------- rating
+#: How the ratings are computed, as the ``rating`` section says.
+RATING_METHOD = ("Lundberg-Palmgren point contact per tooth-contact ring (docs/theory/ratings.md): constant "
+                 "calibrated on the closed-form ball-raceway capacity 98.1 (N, mm) of ISO 281 / ISO 3408-5")
+
+#: The sentence of each failed limit check (:data:`prs_geom.analysis.rating.LIMIT_CHECKS`),
+#: ``{v}`` the value and ``{l}`` the limit.
+LIMIT_MESSAGES = {
+    "speed": "speed {v} rpm exceeds the permissible {l} rpm (the smaller of the d n limit and the critical speed "
+             "limit)",
+    "dn": "d n = nominal diameter x speed = {v} mm/min exceeds the nut speed limit rating.dn_limit_mm_rpm = "
+          "{l} mm/min",
+    "critical_speed": "speed {v} rpm exceeds the permissible critical speed {l} rpm (supports.critical_speed_factor "
+                      "x the first whirling speed)",
+    "buckling": "axial load {v} N exceeds the permissible buckling load {l} N (Euler load / "
+                "supports.buckling_safety)",
+    "static_safety": "static safety s0 = C_0a / F_max = {v} is below the required {l} "
+                     "(rating.required_static_safety)",
+}
+
+
+def _plain(x: float) -> str:
+    """A number as an engineer writes it: whole from 1000 up (10000, 13215714), 4 significant
+    digits from 0.001 to 1000, else scientific (4.72e-05)."""
+    if abs(x) >= 1000.0:
+        return f"{x:.0f}"
+    return f"{x:.4g}" if abs(x) >= 1e-3 else f"{x:.3g}"
+
+
+def limit_warnings(checks: "Sequence[LimitCheck]") -> list[str]:
+    """One sentence per failed check, e.g. "speed 10000 rpm exceeds the permissible 6250 rpm
+    (...)"."""
+    return [LIMIT_MESSAGES[c.name].format(v=_plain(c.value), l=_plain(c.limit)) for c in checks if not c.passed]
+
+
+def limit_check_dict(c: "LimitCheck") -> dict[str, Any]:
+    """One entry of ``rating.limits.checks``."""
+    return {"name": c.name, "kind": c.kind, "value": c.value, "limit": c.limit, "unit": c.unit, "margin": c.margin,
+            "passed": c.passed}
+
+
+def _variant_life(v: "VariantLife") -> dict[str, Any]:
+    return {"l10_revolutions": v.l10_revolutions, "l10_hours": v.l10_hours,
+            "life_ratio_to_equal_sharing": v.life_ratio_to_equal_sharing,
+            "max_hertz_pressure_mpa": v.max_hertz_pressure_mpa, "static_safety": v.static_safety,
+            "hertz_pressure_mpa": {"roller_screw": v.pressure_roller_screw_mpa.tolist(),
+                                   "nut_roller": v.pressure_nut_roller_mpa.tolist()},
+            "gain_over_constant_pitch_hours": v.gain_over_constant_pitch_hours,
+            "gain_factor_over_constant_pitch": v.gain_factor_over_constant_pitch}
+
+
+def _rating_limits(r: "RatingResult") -> dict[str, Any]:
+    lim, sup = r.limits, r.supports
+    return {"unsupported_length_mm": lim.free_length_mm, "root_diameter_mm": lim.root_diameter_mm,
+            "critical_speed_ends": sup.critical_speed_ends, "critical_speed_rpm": lim.critical_speed_rpm,
+            "critical_speed_factor": sup.critical_speed_factor,
+            "permissible_critical_speed_rpm": lim.permissible_critical_speed_rpm,
+            "dn_limit_mm_rpm": lim.dn_limit_mm_rpm, "dn_speed_limit_rpm": lim.dn_speed_limit_rpm,
+            "permissible_speed_rpm": lim.permissible_speed_rpm, "max_speed_rpm": lim.max_speed_rpm,
+            "speed_ok": lim.speed_ok, "buckling_ends": sup.buckling_ends, "buckling_load_n": lim.buckling_load_n,
+            "buckling_safety": sup.buckling_safety, "permissible_buckling_load_n": lim.permissible_buckling_load_n,
+            "buckling_ok": bool(r.max_load_n <= lim.permissible_buckling_load_n),
+            "required_static_safety": r.settings.required_static_safety,
+            "checks": [limit_check_dict(c) for c in r.checks], "all_passed": r.all_passed}
+
+
+def _rating_drive(r: "RatingResult") -> dict[str, Any]:
+    lim = r.limits
+    return {**lim.efficiency, "friction_coefficient": r.settings.friction_coefficient, "lead_mm": lim.lead_mm,
+            "torque_load_n": r.max_load_n, "drive_torque_nm": lim.drive_torque_nm,
+            "back_drive_torque_nm": lim.back_drive_torque_nm, "holding_torque_nm": lim.back_drive_torque_nm}
+
+
+def _rating_stiffness(r: "RatingResult") -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``stiffness`` (single nut) and ``double_nut`` entries."""
+    st = r.stiffness
+    single = {"pitch_lists": st.pitch_lists, "load_n": st.load_n.tolist(),
+              "axial_deflection_um": (st.deflection_mm * 1e3).tolist(), "secant_n_per_um": st.secant.tolist(),
+              "tangent_n_per_um": st.tangent.tolist()}
+    double = {"preload_n": st.preload_n, "preload_source": "rating.preload_n" if r.settings.preload_n is not None
+              else "loading.axial_load_n / 2^(3/2)", "lift_off_load_n": float(st.double_nut["lift_off_n"]),
+              "load_n": st.external_n.tolist(), "displacement_um": (st.displacement_mm * 1e3).tolist(),
+              "stiffness_n_per_um": st.double_nut_stiffness.tolist(),
+              "single_nut_displacement_um": (st.single_displacement_mm * 1e3).tolist()}
+    return single, double
+
+
+def rating_section(r: "RatingResult") -> dict[str, Any]:
+    """The ``rating`` section: ratings, catalogue life of the duty, the life of each pitch
+    variant, limits with their checks, efficiency and torques, stiffness single and double nut."""
+    case = r.case
+    stiffness, double = _rating_stiffness(r)
+    return {
+        "method": RATING_METHOD, "dynamic_load_rating_n": r.dynamic_load_rating_n,
+        "static_load_rating_n": r.static_load_rating_n,
+        "static_pressure_limit_mpa": r.settings.static_pressure_limit_mpa, "static_safety": r.static_safety,
+        "max_load_n": r.max_load_n, "equivalent_load_n": case.equivalent_load_n,
+        "equivalent_speed_rpm": case.equivalent_speed_rpm, "operating_factor": case.operating_factor,
+        "reliability_pct": case.reliability_pct, "reliability_factor": r.reliability_factor,
+        "l10_revolutions": r.l10_revolutions, "l10_hours": r.l10_hours, "target_life_hours": case.life_hours,
+        "required_dynamic_load_n": r.required_dynamic_load_n, "duty_source": case.source,
+        "duty_cases": [{"load_n": float(F), "revolution_weight": float(w), "speed_rpm": float(n)}
+                       for F, w, n in zip(case.loads_n, case.weights, case.speeds_rpm)],
+        "rings": r.rings.as_dict(),
+        "calibration": {"constant": r.calibration_constant, "spread_to_closed_form": list(r.calibration_spread)},
+        "distribution_life": {k: _variant_life(v) for k, v in r.distribution_life.items()},
+        "robust": None if r.robust_computed else (r.robust_note or "not computed"),
+        "limits": _rating_limits(r), "efficiency": _rating_drive(r), "stiffness": stiffness, "double_nut": double,
+    }
+
+
+def roller_loads_dict(result: RollerLoadResult) -> dict[str, Any]:
+    """One solution of the per-roller solver: load coefficients of the tooth positions (n,)
+    per side, per roller (z, n), roller load shares (z,) and the largest coefficient."""
+    per = result.ldc_per_roller
+    return {"ldc_nut_roller": result.ldc_nr.tolist(), "ldc_roller_screw": result.ldc_rs.tolist(),
+            "ldc_per_roller": {k: v.tolist() for k, v in per.items()},
+            "roller_load_share": result.roller_load_share.tolist(),
+            "max_ldc": float(max(per["nut_roller"].max(), per["roller_screw"].max()))}
+
+
+# --------------------------------------------------------------------------- tolerance
+#: What the numbers of the ``tolerance`` section mean.
+TOLERANCE_DEFINITIONS = {
+    "worst_ldc": "per sample: the largest tooth load of any roller, tooth and side, divided by "
+                 "the mean tooth load F / (n z), over every load of the study",
+    "roller_load_share": "load of a roller divided by F / z (1 = equal sharing)",
+    "importance": "variance of the worst coefficient with one error group switched on at a "
+                  "time (same draws), as shares of their sum",
+}
+
+
+def tolerances_dict(t: "Tolerances", n: int) -> dict[str, Any]:
+    """The error model ``t`` as the report writes it, with the per-tooth flank tolerances of n teeth (um)."""
+    d = {k: getattr(t, k) for k in ("distribution", "flank_um", "roller_diameter_um", "screw_eccentricity_um",
+                                    "nut_eccentricity_um", "lead_um", "temperature_k", "source")}
+    per = t.flank_tolerances_um(n)
+    d["per_tooth_flank_um"] = {k: list(v) for k, v in per.items()}
+    if t.target_ldc is not None:
+        d["target_ldc"] = t.target_ldc
+    if t.confidence is not None:
+        d["confidence"] = t.confidence
+    return d
+
+
+def _tolerance_cases(study: Any) -> list[dict[str, Any]]:
+    stats, det, F0 = study.stats, study.deterministic, study.design_load_n
+    return [{"load_fraction": F / F0, "load_N": F,
+             "worst_ldc": tol.summary(stats.worst[i]),
+             "nut_roller": tol.summary(stats.worst_nr[i]),
+             "roller_screw": tol.summary(stats.worst_rs[i]),
+             "roller_load_share_max": tol.summary(stats.share_max[i]),
+             "roller_load_share_min": tol.summary(stats.share_min[i]),
+             "deterministic": {"nut_roller": float(det[i, 0]), "roller_screw": float(det[i, 1]),
+                               "worst_ldc": float(det[i].max())},
+             "samples_with_open_teeth": int((stats.open_teeth[i] > 0).sum())}
+            for i, F in enumerate(study.loads_n)]
+
+
+def tolerance_section(study: Any) -> dict[str, Any]:
+    """The ``tolerance`` section of a :class:`prs_geom.studies.ToleranceStudy`: the error
+    model, the worst coefficient and the roller load shares over the samples, per load and
+    overall, the importance ranking and, with a confidence, the quantile it holds."""
+    stats, F0 = study.stats, study.design_load_n
+    out = {
+        "samples": int(stats.worst.shape[1]), "seed": study.tolerances.seed,
+        "chunk_samples": study.chunk_samples,
+        "tolerances": tolerances_dict(study.tolerances, study.engaged_teeth),
+        "load_fractions": [F / F0 for F in study.loads_n],
+        "worst_ldc": tol.summary(stats.worst.max(axis=0)),
+        "deterministic_worst_ldc": float(study.deterministic.max()),
+        "sides": {"nut_roller": tol.summary(stats.worst_nr.max(axis=0)),
+                  "roller_screw": tol.summary(stats.worst_rs.max(axis=0))},
+        "roller_load_share": {"max": tol.summary(stats.share_max.max(axis=0)),
+                              "min": tol.summary(stats.share_min.min(axis=0))},
+        "cases": _tolerance_cases(study),
+        "importance": study.importance,
+        "definitions": dict(TOLERANCE_DEFINITIONS),
+    }
+    if study.confidence is not None:
+        out["at_confidence"] = {
+            "confidence": study.confidence, "worst_ldc_quantile": study.worst_quantile,
+            "upper_bound_95": study.quantile_upper_bound,
+            "meaning": f"the worst LDC stays below worst_ldc_quantile in a fraction {study.confidence:g} of the "
+                       f"samples; upper_bound_95 bounds that quantile of the population with 95 % "
+                       f"confidence (order statistic; null if the sample is too small)"}
+    return out
+
+
+def synthesis_section(result: Any) -> dict[str, Any]:
+    """A :class:`prs_geom.studies.SynthesisResult` as report.json's ``tolerance.synthesis``
+    (tolerances in um)."""
+    return {"target_ldc": result.target_ldc, "confidence": result.confidence,
+            "confidence_bound": f"one-sided Clopper-Pearson lower bound at {result.bound_level:.0%}",
+            "feasible": result.feasible, "uniform_flank_um": result.uniform_um,
+            "per_tooth_flank_um": {k: list(v) for k, v in result.allocation_um.items()},
+            "influence_ldc_per_um": {k: v.tolist() for k, v in result.influence_per_um.items()},
+            "checks": result.checks}
+
+
+def robust_section(result: Any) -> dict[str, Any]:
+    """A :class:`prs_geom.studies.RobustResult`: the chosen family member and the comparison."""
+    return {"a_nut_roller": result.a_nr, "a_roller_screw": result.a_rs, "evaluations": result.evaluations,
+            **result.comparison}
 
 
 # --------------------------------------------------------------------------- loads
@@ -482,9 +692,9 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
     if results.loads is not None:
         out["model_risk"] = model_risk_section(results.loads.model_risk)
     if results.rating is not None:
-        out["rating"] = results.rating.section
+        out["rating"] = rating_section(results.rating)
     if results.tolerance is not None:
-        out["tolerance"] = results.tolerance.section
+        out["tolerance"] = tolerance_section(results.tolerance)
     if results.meshes is not None:
         out["assembly"] = assembly_section(results)
     if results.step is not None:
