@@ -194,6 +194,19 @@ def test_invalid_harmonic_field_gives_exit_2_and_no_output(field, value):
         assert not out.exists()
 
 
+@pytest.mark.parametrize("field", [f for f in HARMONIC_FIELDS if not f.startswith("mesh.")])
+def test_a_harmonic_dimension_past_10_m_is_exit_2_naming_it(field, tmp_path):
+    """Every dimension of the drive is a size of at most 10 m (as the roller screw's): a
+    flexspline 7e16 mm long once reached the tangency solver and failed as an internal
+    error (exit 70) instead of a design error."""
+    section, key = field.split(".")
+    f = tmp_path / "huge.toml"
+    f.write_text(f'kind = "harmonic"\n[{section}]\n{key} = 6.9e16\n')
+    code, _, err = run(["validate", str(f)])
+    assert code == 2, err
+    assert err.startswith(f"error: {field} = 6.9e+16: must be at most 10000 mm"), err
+
+
 # --------------------------------------------------------------------------- placed assembly
 # The drive placed at one input position a (prs_geom/harmonic/assembly.py): the flexspline
 # deformed by the wave generator, its files (STL, GLB, 3MF) read back by independent readers

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
-from prs_geom.model.validation import check_name, positive, real
+from prs_geom.model.validation import check_name, positive, real, size
 from prs_geom.model.errors import DesignError
 
 __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "HARMONIC_FIELD_COMMENTS",
@@ -56,7 +56,7 @@ class Flexspline:
 
     def __post_init__(self) -> None:
         for f in ("neutral_radius_mm", "length_mm", "arc_radius_mm", "arc_centre_offset_mm", "wall_thickness_mm"):
-            object.__setattr__(self, f, positive(f, getattr(self, f)))
+            object.__setattr__(self, f, size(f, getattr(self, f)))
         if self.arc_radius_mm >= self.length_mm:
             raise DesignError("arc_radius_mm", self.arc_radius_mm, f"must be less than length_mm ({self.length_mm})")
         if self.wall_thickness_mm >= 0.5 * self.neutral_radius_mm:
@@ -72,7 +72,7 @@ class CircularSpline:
 
     def __post_init__(self) -> None:
         for f in ("bore_small_radius_mm", "bore_large_radius_mm", "bore_length_mm", "outer_radius_mm"):
-            object.__setattr__(self, f, positive(f, getattr(self, f)))
+            object.__setattr__(self, f, size(f, getattr(self, f)))
         if self.bore_large_radius_mm <= self.bore_small_radius_mm:
             raise DesignError("bore_large_radius_mm", self.bore_large_radius_mm,
                               f"must exceed bore_small_radius_mm ({self.bore_small_radius_mm}): the bore is a cone")

@@ -337,6 +337,9 @@ class ConsoleProgress:
     def _print(self, text: str) -> None:
         assert self.stream is not None
         try:
-            print(text, file=self.stream, flush=True)
+            # one write with its newline: print() writes the text and the newline separately, and
+            # an interrupt between the two would glue the next line ("interrupted") to this one
+            self.stream.write(text + "\n")
+            self.stream.flush()
         except (OSError, ValueError):   # a closed pipe must not fail the work
             pass
