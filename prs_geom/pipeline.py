@@ -34,7 +34,7 @@ from prs_geom.exports.output import AtomicOutputDir
 from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
                                      check_warnings, constant_pitch_section, fe_cache_warnings, gear_warnings,
                                      inspection_section, mechanism_warnings, rating_warnings, report_dict,
-                                     step_warnings)
+                                     step_files, step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import EnvironmentFailure
@@ -467,25 +467,16 @@ def stage_meshes(ctx: BuildContext) -> None:
         from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids, write_step
 
         # one file per part, named like its STL (the CAD habit: a part, a file)
-        section: dict[str, Any] = {"files": [], "parts": {}}
-
-        def record(part: str, one: dict[str, Any]) -> None:
-            section.update({k: v for k, v in one.items() if k not in ("file", "written", "parts")})
-            section["parts"][part] = {**one["parts"][part], "file": one["file"]}
-            if one["file"]:
-                section["files"].append(one["file"])
-
-        for part in ("screw", "roller", "nut"):
-            record(part, write_step(d, ctx.out / f"{part}.step", parts=(part,),
+        writes = [(part, write_step(d, ctx.out / f"{part}.step", parts=(part,),
                                     screw_profile=ctx.results.contact.screw_profile))
+                  for part in ("screw", "roller", "nut")]
         # the carrier and the ring (when the design has them) as exact B-reps, a file each
-        for part in MECHANISM_STEP_PARTS:
-            if f"{part}_lo" in asm.placed:
-                record(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
-                                          ctx.out / f"{part}.step"))
-        ctx.results.step = section
-        ctx.results.files += section["files"]
-        ctx.results.warnings += step_warnings(section)
+        writes += [(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
+                                       ctx.out / f"{part}.step"))
+                   for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]
+        ctx.results.step = tuple(writes)
+        ctx.results.files += step_files(ctx.results.step)
+        ctx.results.warnings += step_warnings(ctx.results.step)
 
 
 def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> ChecksResult:
@@ -645,11 +636,11 @@ def harmonic_stage(ctx: BuildContext) -> None:
     from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
                                            flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
                                            write_dxf)
-    from prs_geom.harmonic.model import harmonic_report
+    from prs_geom.harmonic.model import harmonic_report, ratio_table
 
     d = ctx.design
-    rep = ctx.results.harmonic = harmonic_report(d)
-    ctx.write_text("ratio_table.csv", ratio_table_csv(rep["table"]))
+    ctx.results.harmonic = harmonic_report(d)
+    ctx.write_text("ratio_table.csv", ratio_table_csv(ratio_table(d)))
     ctx.results.files += plot_ratio(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))
     rows = []

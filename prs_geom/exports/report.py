@@ -39,7 +39,8 @@ __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "
            "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
            "roller_loads_dict", "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
            "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
-           "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists", "MeshStage", "ChecksResult",
+           "step_section", "step_files", "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists",
+           "MeshStage", "ChecksResult",
            "BuildResults", "report_dict"]
 
 
@@ -170,11 +171,28 @@ def rating_warnings(rating: "RatingResult") -> list[str]:
     return out
 
 
-def step_warnings(step: dict[str, Any]) -> list[str]:
-    """A warning for each STEP part that could not be made a valid solid (``step``: the
-    ``step`` section)."""
+def step_section(writes: Sequence[tuple[str, dict[str, Any]]]) -> dict[str, Any]:
+    """report.json's ``step`` section from the STEP files of a build, one per part: ``writes``
+    holds (part, what :func:`prs_geom.exports.step.write_step` or ``write_solids`` returned)
+    in the order written; the file-level keys are those of the last write."""
+    section: dict[str, Any] = {"files": [], "parts": {}}
+    for part, one in writes:
+        section.update({k: v for k, v in one.items() if k not in ("file", "written", "parts")})
+        section["parts"][part] = {**one["parts"][part], "file": one["file"]}
+        if one["file"]:
+            section["files"].append(one["file"])
+    return section
+
+
+def step_files(writes: Sequence[tuple[str, dict[str, Any]]]) -> list[str]:
+    """The STEP files a build wrote (parts that could not be made valid solids write none)."""
+    return list(step_section(writes)["files"])
+
+
+def step_warnings(writes: Sequence[tuple[str, dict[str, Any]]]) -> list[str]:
+    """A warning for each STEP part that could not be made a valid solid."""
     return [f"STEP: the {part} could not be made a valid solid; {part}.step was not written: {row['reason']}"
-            for part, row in step["parts"].items() if not row["valid"]]
+            for part, row in step_section(writes)["parts"].items() if not row["valid"]]
 
 
 def mechanism_warnings(m: "MechanismCheck") -> list[str]:
@@ -599,8 +617,8 @@ class BuildResults:
     #: the tolerance study (:class:`prs_geom.studies.ToleranceStudy`, a layer above the exports)
     tolerance: Any = None
     meshes: MeshStage | None = None
-    #: the ``step`` section of :func:`prs_geom.exports.step.write_step` (``--step`` builds)
-    step: dict[str, Any] | None = None
+    #: (part, what the STEP writer returned) per STEP file of a ``--step`` build (:func:`step_section`)
+    step: tuple[tuple[str, dict[str, Any]], ...] | None = None
     mechanism: "MechanismCheck | None" = None
     kinematics: "Kinematics | None" = None
     parts_list: list["PartsListRow"] | None = None
@@ -698,7 +716,7 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
     if results.meshes is not None:
         out["assembly"] = assembly_section(results)
     if results.step is not None:
-        out["step"] = results.step
+        out["step"] = step_section(results.step)
     if results.mechanism is not None:
         out["mechanism"] = mechanism_section(results.mechanism)
     if results.kinematics is not None:

@@ -44,7 +44,7 @@ from prs_geom.model.errors import DesignError
 __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "HARMONIC_FIELD_COMMENTS",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "IT_MULTIPLIERS", "IT_STEPS", "it_tolerance_um",
-           "tolerance_for_ratio", "harmonic_report"]
+           "tolerance_for_ratio", "harmonic_report", "ratio_table"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -306,22 +306,31 @@ def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float 
             "it_grade": grade, "ratio_change_per_um": 2e-3 / delta}
 
 
-def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dict[str, Any]:
+def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[dict[str, float]]:
+    """The contact state at each position a (mm; default 65 positions over the control
+    range), one row each: a, generatrix tilt beta and contact angle phi (deg), contact and
+    cone radius and their difference (mm), ratio."""
     if a_values is None:
         a_values = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
     st = contact_state(d, a_values)
+    return [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
+             "phi_deg": float(np.degrees(st["phi_rad"][k])),
+             "contact_radius_mm": float(st["contact_radius_mm"][k]),
+             "cone_radius_mm": float(st["cone_radius_mm"][k]),
+             "radius_difference_mm": float(st["radius_difference_mm"][k]),
+             "ratio": float(st["ratio"][k])} for k in range(len(st["a_mm"]))]
+
+
+def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dict[str, Any]:
+    """report.json's ``harmonic`` section: the cone geometry, the speed range, the ratio
+    table (:func:`ratio_table`) and the diameter tolerances for three ratios."""
     rng = speed_range(d)
     return {
         "alpha_deg": math.degrees(d.alpha),
         "a0_mm": d.a0,
         "infinite_ratio_position_mm": infinite_ratio_position(d),
         **rng,
-        "table": [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
-                   "phi_deg": float(np.degrees(st["phi_rad"][k])),
-                   "contact_radius_mm": float(st["contact_radius_mm"][k]),
-                   "cone_radius_mm": float(st["cone_radius_mm"][k]),
-                   "radius_difference_mm": float(st["radius_difference_mm"][k]),
-                   "ratio": float(st["ratio"][k])} for k in range(len(st["a_mm"]))],
+        "table": ratio_table(d, a_values),
         "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
                        "see prs_geom/harmonic.py",
