@@ -43,7 +43,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a smaller grid")
     args = ap.parse_args()
-    from prs_geom.mesh.budget import format_bytes
+    from prs_geom.model.errors import format_bytes
     from prs_geom.model.design import MeshSettings, default_design
     from prs_geom.model.io import save_design
     from prs_geom.pipeline import plan_build

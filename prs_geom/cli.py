@@ -29,8 +29,9 @@ from typing import Sequence
 from prs_geom._version import __version__
 from prs_geom.model.design import PRSDesign, default_design
 from prs_geom.exports.output import check_output_dir
-from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, ResourceLimitError, parse_size
-from prs_geom.model.errors import DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError
+from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, parse_size
+from prs_geom.model.errors import (DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError,
+                                   ResourceLimitError)
 from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
 from prs_geom.runtime.progress import ConsoleProgress, silent
 

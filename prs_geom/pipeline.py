@@ -37,7 +37,7 @@ from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, Pitc
                                      step_files, step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.errors import EnvironmentFailure
+from prs_geom.model.errors import EnvironmentFailure, ResourceLimitError
 from prs_geom.model.io import PRS_KINDS, design_hash, dumps_toml, load_design
 from prs_geom.runtime.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
@@ -694,11 +694,11 @@ def plan_build(design: PRSDesign, memory_budget: int | None = None) -> "tuple[in
     The default worker count (:func:`prs_geom.runtime.pool.default_workers`), none for a
     design checked in axial windows, and none when the design fits ``memory_budget``
     (bytes; None: the default budget) only serially, because the workers' peaks add to the
-    main process's. Raises :class:`~prs_geom.mesh.budget.ResourceLimitError` when it fits
+    main process's. Raises :class:`~prs_geom.model.errors.ResourceLimitError` when it fits
     neither way.
     """
     from prs_geom.runtime.pool import default_workers
-    from prs_geom.mesh.budget import ResourceLimitError, check_windows, guard
+    from prs_geom.mesh.budget import check_windows, guard
 
     workers = default_workers()
     if check_windows(design) is not None:
@@ -753,12 +753,12 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
 
             require_ocp()   # a missing extra is known now, not after the meshing
         workers, _ = plan_build(design, memory_budget)
-    from prs_geom.mesh.budget import ResourceLimitError, default_budget_bytes
+    from prs_geom.mesh.budget import BASE_BYTES, default_budget_bytes
     from prs_geom.runtime.memwatch import MemoryWatch
 
     # the budget holds while the build runs, too (prs_geom.runtime.memwatch): exit 3, nothing written
     watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,
-                        f"the build of {design.name}")
+                        f"the build of {design.name}", base_bytes=BASE_BYTES)
     try:
         with watch, atomic as tmp:
             ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,

@@ -69,7 +69,8 @@ def test_a_design_that_fits_only_serially_builds_without_workers(tmp_path, monke
     """The workers' memory adds to the main process's; a build whose estimate fits the
     budget only without them runs serially instead of being refused."""
     from prs_geom import pipeline
-    from prs_geom.mesh.budget import ResourceLimitError, estimate
+    from prs_geom.mesh.budget import estimate
+    from prs_geom.model.errors import ResourceLimitError
     from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
 
     d = PRSDesign(name="small", thread=Thread(engaged_teeth=3), roller=Roller(count=3),

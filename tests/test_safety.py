@@ -386,7 +386,7 @@ def test_loads_command_succeeds_for_many_teeth(tmp_path, n):
 
 def test_budget_from_the_environment_applies_to_the_python_api(tmp_path, monkeypatch):
     import prs_geom as pg
-    from prs_geom.mesh.budget import ResourceLimitError
+    from prs_geom.model.errors import ResourceLimitError
 
     monkeypatch.setenv("PRS_GEOM_MEMORY_BUDGET", "100M")
     with pytest.raises(ResourceLimitError, match=r"over the budget 100.0 MB \(set by \$PRS_GEOM_MEMORY_BUDGET\)"):
@@ -461,7 +461,8 @@ def test_memory_budget_needs_a_unit(tmp_path, tiny_file, given):
 
 def test_validate_and_build_give_one_memory_estimate(tmp_path, tiny_file):
     from prs_geom.pipeline import plan_build
-    from prs_geom.mesh.budget import format_bytes, parse_size
+    from prs_geom.mesh.budget import parse_size
+    from prs_geom.model.errors import format_bytes
 
     workers, est = plan_build(TINY, parse_size("4G"))
     code, out, _ = run(["validate", str(tiny_file), "--memory-budget", "4G"])
@@ -535,7 +536,8 @@ def test_a_build_over_its_budget_at_run_time_is_stopped_with_exit_3_and_no_outpu
         "import sys\n"
         "import prs_geom as pg\n"
         "import prs_geom.pipeline as pipeline\n"
-        "from prs_geom.mesh.budget import ResourceLimitError, parse_size\n"
+        "from prs_geom.mesh.budget import parse_size\n"
+        "from prs_geom.model.errors import ResourceLimitError\n"
         "from prs_geom.runtime.memwatch import process_tree_rss\n"
         "pipeline.plan_build = lambda design, budget=None: (2, None)   # the estimate bypassed\n"
         "base = process_tree_rss()[0]\n"
@@ -555,7 +557,7 @@ def test_a_build_over_its_budget_at_run_time_is_stopped_with_exit_3_and_no_outpu
 
 def test_cli_maps_the_runtime_stop_to_exit_3(tmp_path, tiny_file, monkeypatch):
     import prs_geom.pipeline as pipeline
-    from prs_geom.mesh.budget import ResourceLimitError
+    from prs_geom.model.errors import ResourceLimitError
 
     def stopped(*a, **k):
         raise ResourceLimitError("the build of tiny was stopped: its resident memory reached ...")

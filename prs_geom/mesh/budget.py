@@ -23,13 +23,13 @@ import re
 from dataclasses import dataclass
 
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.errors import DesignError, PRSGeomError, format_value
+from prs_geom.model.errors import DesignError, ResourceLimitError, format_bytes, format_value
 
 __all__ = [
     "BASE_BYTES", "BYTES_PER_CHECK_TRIANGLE", "BYTES_PER_EXPORT_TRIANGLE", "BYTES_PER_PLACED_TRIANGLE",
     "CHECK_TOLERANCE_MM", "CHECK_WINDOW_TEETH", "DATUM_SLOT_TRIANGLES", "DEFAULT_BUDGET_FRACTION", "Estimate",
-    "MEMORY_BUDGET_ENV", "ResourceLimitError", "WORK_MARGIN", "available_memory_bytes", "check_windows",
-    "default_budget_bytes", "estimate", "format_bytes", "guard", "parse_size", "part_triangles",
+    "MEMORY_BUDGET_ENV", "WORK_MARGIN", "available_memory_bytes", "check_windows",
+    "default_budget_bytes", "estimate", "guard", "parse_size", "part_triangles",
 ]
 
 #: Share of the available memory a build may plan to use by default.
@@ -77,10 +77,6 @@ def check_windows(design: PRSDesign) -> list[tuple[float, float]] | None:
     return list(zip([-math.inf, *cuts], [*cuts, math.inf]))
 
 
-class ResourceLimitError(PRSGeomError):
-    """The estimated memory of a job exceeds the budget (exit code 2)."""
-
-
 def available_memory_bytes() -> int:
     """Memory available to new work (bytes): MemAvailable of /proc/meminfo, else the
     physical memory."""
@@ -126,14 +122,6 @@ def parse_size(text: str, flag: str = "--memory-budget") -> int:
     if not math.isfinite(value) or value <= 0:
         raise DesignError(flag, text, "must be a positive size")
     return int(value)
-
-
-def format_bytes(n: float) -> str:
-    for unit, scale in (("GB", 2 ** 30), ("MB", 2 ** 20), ("kB", 2 ** 10)):
-        if n >= scale:
-            v = n / scale
-            return f"{v:.1f} {unit}" if v < 1e5 else f"{v:.3g} {unit}"
-    return f"{n:.0f} B"
 
 
 def _millions(n: float) -> str:

@@ -18,7 +18,7 @@ from typing import Any
 
 __all__ = ["SHOWN_FIELD_CHARS", "SHOWN_PREFIX_CHARS", "SHOWN_TEXT_CHARS", "SHOWN_VALUE_CHARS", "ConvergenceError",
            "DesignError", "DesignWarning", "EnvironmentFailure", "OutputRefused", "PRSGeomError", "format_value",
-           "key_name", "quote"]
+           "key_name", "quote", "ResourceLimitError", "format_bytes"]
 
 
 def quote(text: str) -> str:
@@ -242,6 +242,23 @@ class OutputRefused(PRSGeomError):
     >>> open("notes/todo.txt").read()
     'mine'
     """
+
+
+class ResourceLimitError(PRSGeomError):
+    """A job does not fit the memory budget (exit code 3): refused up front when its
+    estimated peak exceeds the budget (:func:`prs_geom.mesh.budget.guard`), or stopped when
+    its resident memory passes it while running (:mod:`prs_geom.runtime.memwatch`). Nothing
+    was written."""
+
+
+def format_bytes(n: float) -> str:
+    """A byte count for a message: ``1.5 GB``, ``412.2 MB``, ``12.0 kB``, ``512 B`` (binary
+    multiples, one decimal; three significant digits past 1e5 of a unit)."""
+    for unit, scale in (("GB", 2 ** 30), ("MB", 2 ** 20), ("kB", 2 ** 10)):
+        if n >= scale:
+            v = n / scale
+            return f"{v:.1f} {unit}" if v < 1e5 else f"{v:.3g} {unit}"
+    return f"{n:.0f} B"
 
 
 class ConvergenceError(PRSGeomError, RuntimeError):

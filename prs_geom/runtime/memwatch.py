@@ -15,13 +15,12 @@ their sum passes the budget it
    caller turns that into the same :class:`ResourceLimitError` (:attr:`MemoryWatch.breached`).
 
 What the calling process already held beyond the interpreter share of the estimate
-(:data:`prs_geom.mesh.budget.BASE_BYTES`) when the job started, a notebook's earlier work
+(``base_bytes``: :data:`prs_geom.mesh.budget.BASE_BYTES` for a build) when the job started, a notebook's earlier work
 say, is not the job's: the limit rises by it (:attr:`MemoryWatch.carried`). In a fresh
 command-line process there is none.
 
 Linux only (``/proc``); elsewhere the watch does nothing. It imports nothing of prs_geom but
-the budget's error type, byte formatting and interpreter share (:mod:`prs_geom.mesh.budget`;
-the one import of the runtime above the model layer, listed in the import-linter contract).
+the model's error type and byte formatting (:class:`~prs_geom.model.errors.ResourceLimitError`).
 """
 from __future__ import annotations
 
@@ -31,7 +30,7 @@ import threading
 import time
 from typing import Any
 
-from prs_geom.mesh.budget import ResourceLimitError, format_bytes
+from prs_geom.model.errors import ResourceLimitError, format_bytes
 
 __all__ = ["MemoryWatch", "process_tree_rss", "SAMPLE_S", "GRACE_S"]
 
@@ -94,9 +93,12 @@ class MemoryWatch:
         The largest sum seen, bytes.
     """
 
-    def __init__(self, budget: int, what: str = "this job") -> None:
+    def __init__(self, budget: int, what: str = "this job", *, base_bytes: int = 0) -> None:
         self.budget = int(budget)
         self.what = what
+        #: the interpreter share (bytes) the job's up-front estimate already counts
+        #: (:data:`prs_geom.mesh.budget.BASE_BYTES` for a build)
+        self.base_bytes = int(base_bytes)
         #: what the calling process held before the job beyond the interpreter share the
         #: estimate counts (a notebook or test process with earlier work in memory): not the
         #: job's, so the limit rises by it
@@ -118,9 +120,7 @@ class MemoryWatch:
     def __enter__(self) -> "MemoryWatch":
         if not os.path.exists("/proc/self/statm"):
             return self
-        from prs_geom.mesh.budget import BASE_BYTES
-
-        self.carried = max(0, process_tree_rss()[0] - BASE_BYTES)
+        self.carried = max(0, process_tree_rss()[0] - self.base_bytes)
         if self._main:
             self._previous = signal.signal(signal.SIGUSR1, self._on_breach)
         self._thread = threading.Thread(target=self._run, name="prs-geom-memory-watch", daemon=True)
