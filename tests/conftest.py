@@ -201,9 +201,10 @@ FILE_COST_S = {
 }
 
 
-def _is_slow(item) -> bool:
+def _listed(item, files: set[str], tests: set[tuple[str, str]]) -> bool:
+    """Whether ``item`` is in one of ``files`` or is one of ``tests`` (file, name prefix)."""
     module = item.path.stem
-    return module in SLOW_FILES or any(module == f and item.name.startswith(p) for f, p in SLOW_TESTS)
+    return module in files or any(module == f and item.name.startswith(p) for f, p in tests)
 
 
 def pytest_collection_modifyitems(config, items):
@@ -213,10 +214,9 @@ def pytest_collection_modifyitems(config, items):
     # stable: the tests of one file keep their order
     items.sort(key=lambda item: -FILE_COST_S.get(item.path.stem, 0))
     for item in items:
-        if _is_slow(item):
+        if _listed(item, SLOW_FILES, SLOW_TESTS):
             item.add_marker(pytest.mark.slow)
-        module = item.path.stem
-        if module in DOCS_FILES or any(module == f and item.name.startswith(p) for f, p in DOCS_TESTS):
+        if _listed(item, DOCS_FILES, DOCS_TESTS):
             item.add_marker(pytest.mark.docs)
         if not any(item.get_closest_marker(m) for m in SLOW_MARKERS):
             item.add_marker(pytest.mark.quick)

@@ -112,19 +112,21 @@ def test_no_duplicate_code():
     assert run.returncode == 0 and "R0801" not in run.stdout, run.stdout[-4000:] + run.stderr[-2000:]
 
 
+def _string_key_reads(tree: ast.AST) -> list[ast.Subscript]:
+    """Every ``x["key"]`` read (a subscript by a string constant, in load context)."""
+    return [node for node in ast.walk(tree) if isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Load)
+            and isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str)]
+
+
 def test_the_build_reads_no_report_dict():
     """The stages pass typed results on; report.json is rendered at the end
     (prs_geom.exports.report). No function of the pipeline reads a value out of a dict by a
     string key (``rep["passed"]``), the way a stage reading a report section back would."""
     tree = ast.parse((PACKAGE / "pipeline.py").read_text(encoding="utf-8"))
-    reads = [f"pipeline.py:{node.lineno} [{node.slice.value!r}]" for node in ast.walk(tree)
-             if isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Load)
-             and isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str)]
+    reads = [f"pipeline.py:{node.lineno} [{node.slice.value!r}]" for node in _string_key_reads(tree)]
     assert not reads, "string-key reads in the pipeline:\n" + "\n".join(reads)
 
 
 def test_the_report_dict_rule_finds_a_read():
     tree = ast.parse('def stage(ctx):\n    rep = ctx.report\n    if not rep["passed"]:\n        pass\n')
-    reads = [n for n in ast.walk(tree) if isinstance(n, ast.Subscript) and isinstance(n.ctx, ast.Load)
-             and isinstance(n.slice, ast.Constant) and isinstance(n.slice.value, str)]
-    assert len(reads) == 1
+    assert [node.slice.value for node in _string_key_reads(tree)] == ["passed"]

@@ -219,7 +219,6 @@ import subprocess
 from prs_geom._version import __version__
 from prs_geom.harmonic.assembly import (assembly_checks, build_assembly, default_position, deform,
                                         inner_wall_radius, meridian_tilt, wave_generator)
-from prs_geom.harmonic.exports import harmonic_outputs
 from prs_geom.harmonic.model import harmonic_report
 from prs_geom.model.io import design_hash
 
@@ -229,14 +228,10 @@ ASSEMBLY_FILES = ("flexspline_placed.stl", "wave_generator.stl", "assembly.glb",
 
 @pytest.fixture(scope="module")
 def placed(tmp_path_factory):
-    """A default harmonic build with the placed-assembly outputs (written by the build once
-    the pipeline calls harmonic_outputs; until then, here, as the pipeline will)."""
+    """A default harmonic build: the build writes the placed-assembly outputs."""
     d = HarmonicDesign()
     out = tmp_path_factory.mktemp("placed") / "out"
-    report = build(d, out)
-    if "report.html" not in report["files"]:
-        report["files"] += harmonic_outputs(d, out, report, "2024-01-02", __version__)
-    return d, out, report
+    return d, out, build(d, out)
 
 
 def test_deformation_reproduces_the_model_section_on_the_major_axis():

@@ -613,17 +613,6 @@ def _mechanism_html(m: dict[str, Any]) -> str:
     return "".join(out)
 
 
-def _gears_report(design: PRSDesign) -> dict[str, Any] | None:
-    """The ``gears`` section of a design, as the gears stage reports it (None without gears)."""
-    from prs_geom.analysis.gears import analyse_gears
-
-    try:
-        analysis = analyse_gears(design)
-    except ValueError:
-        return None
-    return None if analysis is None else gears_section(analysis)
-
-
 def _contact_html(contact: ContactResult) -> list[str]:
     """The contact section: the five contact points, the screw pitch diameters and the
     angle conventions."""
@@ -721,13 +710,6 @@ def _checks_shown(results: BuildResults) -> dict[str, Any] | None:
     return {} if results.meshes is not None else None
 
 
-def _gears_shown(results: BuildResults) -> dict[str, Any] | None:
-    """The ``gears`` section of the gears stage, or (stage not run) computed from the design."""
-    if results.gears is not None:
-        return gears_section(results.gears)
-    return _gears_report(results.design) if results.design.gears.enabled else None
-
-
 def _analysis_html(results: BuildResults, svgs: dict[str, str]) -> list[str]:
     """The sections of the analysis stages, in page order: contact to parts list."""
     parts: list[str] = []
@@ -742,9 +724,8 @@ def _analysis_html(results: BuildResults, svgs: dict[str, str]) -> list[str]:
     checks = _checks_shown(results)
     if checks is not None:
         parts.append(_checks_html(checks, results.contact))
-    gears = _gears_shown(results)
-    if gears:
-        parts.append(_gears_html(gears))
+    if results.gears is not None:
+        parts.append(_gears_html(gears_section(results.gears)))
     if results.mechanism is not None:
         parts.append(_mechanism_html(mechanism_section(results.mechanism)))
     if results.parts_list:
@@ -756,9 +737,8 @@ def write_html(path: Path, results: BuildResults, plots_svg: dict[str, str] | No
     """Write ``report.html`` from the stage results of a build.
 
     ``results``: each stage's result (:class:`~prs_geom.exports.report.BuildResults`; a stage
-    that did not run has no section, except the gears, computed from the design when the
-    gears stage did not run). ``plots_svg`` maps plot names (``loads_ldc``, ...) to their SVG
-    text, as the plot stage rendered them; the page shows them inline. ``date`` and
+    that did not run has no section). ``plots_svg`` maps plot names (``loads_ldc``, ...) to
+    their SVG text, as the plot stage rendered them; the page shows them inline. ``date`` and
     ``version`` go into the provenance line. Templates, style sheet and viewer script are
     package data (``templates/report.html``, ``report.css``, ``viewer.js``).
 

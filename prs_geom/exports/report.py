@@ -186,13 +186,13 @@ def step_section(writes: Sequence[tuple[str, dict[str, Any]]]) -> dict[str, Any]
 
 def step_files(writes: Sequence[tuple[str, dict[str, Any]]]) -> list[str]:
     """The STEP files a build wrote (parts that could not be made valid solids write none)."""
-    return list(step_section(writes)["files"])
+    return [one["file"] for _, one in writes if one["file"]]
 
 
 def step_warnings(writes: Sequence[tuple[str, dict[str, Any]]]) -> list[str]:
     """A warning for each STEP part that could not be made a valid solid."""
-    return [f"STEP: the {part} could not be made a valid solid; {part}.step was not written: {row['reason']}"
-            for part, row in step_section(writes)["parts"].items() if not row["valid"]]
+    return [f"STEP: the {part} could not be made a valid solid; {part}.step was not written: "
+            f"{one['parts'][part]['reason']}" for part, one in writes if not one["parts"][part]["valid"]]
 
 
 def mechanism_warnings(m: "MechanismCheck") -> list[str]:

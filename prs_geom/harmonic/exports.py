@@ -12,7 +12,7 @@ other half; the revolution error is measured (:func:`revolve_deviation`) and rep
 the arc-chord bound.
 
 :func:`place_harmonic` writes what the placed assembly adds and :func:`write_harmonic_html`
-the page (the pipeline's harmonic stage calls them last; :func:`harmonic_outputs` does both):
+the page (the pipeline's harmonic stage calls them last):
 the drive at one input position (:mod:`prs_geom.harmonic.assembly`) as per-part
 STLs of the new parts (``flexspline_placed.stl``: the deformed flexspline in the assembly
 frame; ``wave_generator.stl``: its own frame), ``assembly.glb`` (glTF 2.0, metres, +Y up, one
@@ -48,7 +48,7 @@ from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state
 
 __all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "write_dxf", "ASSEMBLY_MATERIALS",
            "assembly_scene", "display_colours", "HarmonicPlacement", "place_harmonic",
-           "write_harmonic_html", "harmonic_outputs"]
+           "write_harmonic_html"]
 
 
 def revolve_deviation(mesh: trimesh.Trimesh, profile: np.ndarray) -> float:
@@ -228,19 +228,3 @@ def write_harmonic_html(design: HarmonicDesign, out_dir: Path, report: dict[str,
     view = build_assembly(design, asm.position_mm, max(DISPLAY_TOLERANCE_MM, asm.tolerance_mm))
     write_report_html(out / "report.html", design, report, view, display_colours(), svg_text, date, version)
     return "report.html"
-
-
-def harmonic_outputs(design: HarmonicDesign, out_dir: Path, report: dict[str, Any], date: str, version: str,
-                     *, position_mm: float | None = None) -> list[str]:
-    """Place the drive, check it, and write its files into ``out_dir`` (:func:`place_harmonic`
-    and :func:`write_harmonic_html`); returns the file names written.
-
-    ``report`` (the build report holding ``harmonic`` and ``checks.meshes``) gains
-    ``assembly``, ``checks.assembly`` and the warning lines of :class:`HarmonicPlacement`
-    before report.html is written from it.
-    """
-    placed = place_harmonic(design, out_dir, position_mm=position_mm)
-    report["assembly"] = placed.assembly
-    report.setdefault("checks", {})["assembly"] = placed.checks
-    report.setdefault("warnings", []).extend(placed.warnings)
-    return [*placed.files, write_harmonic_html(design, out_dir, report, placed, date, version)]
