@@ -195,7 +195,10 @@ def cmd_validate(args: argparse.Namespace) -> int:
         # a failed fit or stack-up is a warning, as in build
         for msg in layout_warnings(check_layout(design)):
             print(f"warning: {msg}", file=sys.stderr)
+        from prs_geom.geometry.actuator import actuator_layout
         from prs_geom.pipeline import plan_build
+
+        actuator_layout(design)   # the screw ends, bearings and nut mounting, with their tables
 
         # the same estimate and worker plan as build (exit 2 when build would refuse it)
         workers, est = plan_build(design, _memory_budget(args))
@@ -533,6 +536,8 @@ def cmd_rating(args: argparse.Namespace) -> int:
         _print_json(rep)
     else:
         _print_rating(design.name, rep)
+    for msg in rating.limits.supports.warnings:
+        print(f"warning: supports: {msg}", file=sys.stderr)
     # a failed limit is a warning, or with --strict an error (exit 1); stdout stays the report
     for msg in failed:
         print(f"{'error' if args.strict else 'warning'}: {msg}", file=sys.stderr)
@@ -570,7 +575,8 @@ def _print_rating(name: str, rep: dict) -> None:
     print(f"limits: critical speed {lim['critical_speed_rpm']:.5g} rpm ({lim['critical_speed_ends']}, "
           f"{lim['unsupported_length_mm']:g} mm), d n limit {lim['dn_speed_limit_rpm']:.5g} rpm, permissible "
           f"{lim['permissible_speed_rpm']:.5g} rpm; Euler buckling {lim['buckling_load_n']:.5g} N "
-          f"({lim['buckling_ends']}), permissible {lim['permissible_buckling_load_n']:.5g} N")
+          f"({lim['buckling_ends']}, {lim['buckling_length_mm']:g} mm), permissible "
+          f"{lim['permissible_buckling_load_n']:.5g} N; supports from the {lim['supports_source']}")
     titles = {"speed": "speed", "dn": "d n", "critical_speed": "critical speed", "buckling": "buckling",
               "static_safety": "static safety s0"}
     rows = [["limit check", "value", "limit", "unit", "margin", "result"]]

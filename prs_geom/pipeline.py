@@ -34,6 +34,7 @@ from prs_geom.exports.output import AtomicOutputDir
 from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
                                      check_warnings, constant_pitch_section, fe_cache_warnings, gear_warnings,
                                      inspection_section, mechanism_warnings, rating_warnings, report_dict,
+                                     ActuatorStage, actuator_warnings,
                                      step_files, step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
@@ -431,15 +432,16 @@ def stage_tolerance(ctx: BuildContext) -> None:
 def mesh_checks_job(design: PRSDesign, parts: dict[str, Any], progress: ProgressFn = silent) -> list[dict[str, Any]]:
     """``checks.meshes``: each part mesh against its analytic surface and volume
     (:func:`prs_geom.mesh.thread.mesh_report`), in the order of ``parts``."""
-    from prs_geom.geometry.frames import thread_length
-    from prs_geom.mesh.thread import analytic_thread_volume, mesh_report
+    from prs_geom.geometry.frames import screw_thread_length, thread_length
+    from prs_geom.mesh.thread import analytic_thread_volume, mesh_report, run_out_volume
 
     rows = []
-    lengths = {"screw": design.screw.length_mm, "roller": thread_length(design), "nut": thread_length(design)}
+    lengths = {"screw": screw_thread_length(design), "roller": thread_length(design), "nut": thread_length(design)}
     for i, (name, tm) in enumerate(parts.items()):
         graded = not tm.warp.is_identity
         vol = None if graded else analytic_thread_volume(
-            tm.profile, lengths[name], tm.body_radius) - tm.datum_mark.volume
+            tm.profile, lengths[name], tm.body_radius) - tm.datum_mark.volume + sum(
+            run_out_volume(tm.profile, ro) for ro in tm.run_outs)
         rows.append(mesh_report(tm, vol))
         progress("mesh checks", i + 1, len(parts))
     return rows
@@ -545,6 +547,7 @@ def stage_mechanism(ctx: BuildContext) -> None:
     parts_list.csv and parts_list.xlsx)."""
     from prs_geom.exports.bom import parts_list, parts_list_csv, write_parts_list_xlsx
     from prs_geom.mesh.volumes import part_volumes
+    from prs_geom.geometry.actuator import actuator_layout, stroke_end_checks
     from prs_geom.geometry.mechanism import layout
 
     d = ctx.design
@@ -555,6 +558,11 @@ def stage_mechanism(ctx: BuildContext) -> None:
 
         ctx.results.mechanism = check_mechanism(asm, lay, lay.ring.designation)
         ctx.results.warnings += mechanism_warnings(ctx.results.mechanism)
+    act = actuator_layout(d)
+    if act is not None:
+        # the engagement is the same all along the stroke: only the ends are checked there
+        ctx.results.actuator = ActuatorStage(act, stroke_end_checks(d, act))
+        ctx.results.warnings += actuator_warnings(ctx.results.actuator)
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 
     try:
@@ -745,9 +753,11 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
     workers = None
     if not harmonic:
+        from prs_geom.geometry.actuator import actuator_layout
         from prs_geom.geometry.mechanism import check_layout
 
         check_layout(design)   # the standard tables, fits and stack-up: refused now, not after the meshing
+        actuator_layout(design)
         if options is not None and options.step:
             from prs_geom.exports.step import require_ocp
 

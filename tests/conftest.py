@@ -152,6 +152,7 @@ SLOW_FILES = {
 #: (file, test-name prefix) of the slow tests in otherwise quick files, as measured with
 #: ``--durations=0`` (each takes seconds: a build, a sampled sweep, a convergence study).
 SLOW_TESTS = {
+    ("test_actuator_meshes", "test_default_assembly_places_the_actuator_parts"),
     ("test_architecture", "test_theoretical_diameter_is_solved_once_per_build"),
     ("test_architecture", "test_package_import_is_light"),
     ("test_assembly", "test_end_gears_mesh_with_the_ring_gear"),

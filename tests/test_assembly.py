@@ -4,6 +4,7 @@ import math
 import numpy as np
 import pytest
 
+from prs_geom.geometry.actuator import actuator_layout
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, carrier_angles, roller_transform
 from prs_geom.mesh.assembly import build_assembly
 from prs_geom.mesh.volumes import part_volumes
@@ -102,7 +103,17 @@ def test_scene_names_and_gear_parts():
     # one volume per rigid body: a roller with its gears (they meet in end faces: no overlap)
     vol = part_volumes(asm)
     assert set(vol) == {asm.rigid_body(n) for n in asm.placed}
-    assert vol["screw"] == float(asm.placed["screw"][0].volume)
+    # the screw with its actuator ends: each end's run-out cylinder (root radius - 0.02 mm, the
+    # tolerance, over the run-out) lies in the thread and counts once; at the lower end it
+    # fills the thread's datum slot, which the union therefore does not lose
+    lay = actuator_layout(d)
+    assert asm.rigid_body("screw_end_lo") == asm.rigid_body("screw_end_hi") == "screw"
+    screw = [m for n, (m, _, _) in asm.placed.items() if asm.rigid_body(n) == "screw"]
+    assert len(screw) == 3
+    r_ro = 0.5 * d.screw.minor_diameter_mm - 0.02
+    run_outs = sum(math.pi * r_ro ** 2 * (e.run_out[1] - e.run_out[0]) for e in lay.ends)
+    slot = asm.parts["screw"].datum_mark.volume
+    assert vol["screw"] == pytest.approx(sum(float(m.volume) for m in screw) - run_outs + slot, rel=1e-5)
     assert len({vol[f"roller_{k}"] for k in range(4)}) == 1
     roller = [m for n, (m, _, _) in asm.placed.items() if asm.rigid_body(n) == "roller_0"]
     assert vol["roller_0"] == pytest.approx(sum(float(m.volume) for m in roller), rel=1e-12)

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from cli_helpers import run, to_toml
 from prs_geom import pipeline
-from prs_geom.model.io import design_to_dict
+from prs_geom.model.io import FIELD_COMMENTS, design_to_dict
 from prs_geom.model.design import RatingSettings, Supports, Tolerances, default_design
 
 
@@ -108,6 +108,28 @@ INVALID = {
     **{f"mechanism.{k}": out_of(0.0, 5.0) for k in ("carrier_radial_clearance_mm", "roller_end_play_mm",
                                                      "ring_play_mm")},
     "mechanism.length_tolerance": st.sampled_from(["x11", "js99", "", "H7/g6", 11]),
+    # the [actuator] section (format version 2); sizes looked up in a table at construction
+    **{f"actuator.{k}": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False))
+       for k in ("enabled", "floating_end.enabled")},
+    "actuator.stroke_mm": out_of(0.0, 1e5),
+    "actuator.over_travel_mm": out_of(0.0, 1e3),
+    **{f"actuator.{k}": bad_size for k in (
+        "screw_run_out_mm", "thread_chamfer_mm", "fixed_end.bearing_width_mm", "fixed_end.bearing_outer_diameter_mm",
+        "fixed_end.undercut_width_mm", "floating_end.bearing_width_mm", "floating_end.bearing_outer_diameter_mm",
+        "drive.diameter_mm", "drive.length_mm", "drive.key_length_mm", "drive.flat_depth_mm",
+        "nut_mount.bolt_circle_diameter_mm", "nut_mount.flange_diameter_mm", "nut_mount.flange_thickness_mm",
+        "nut_mount.bolt_length_mm")},
+    **{f"actuator.{k}": st.one_of(bad_size, st.sampled_from([21.0, 23.0, 101.0]))
+       for k in ("fixed_end.bearing_bore_mm", "floating_end.bearing_bore_mm")},
+    "actuator.fixed_end.locknut_thread_mm": st.one_of(bad_size, st.sampled_from([11.0, 21.0, 120.0])),
+    **{f"actuator.{k}": bad_choice(("02", "03")) for k in ("fixed_end.bearing_series", "floating_end.bearing_series")},
+    **{f"actuator.{k}": st.sampled_from(["x5", "k99", "", 5]) for k in (
+        "fixed_end.seat_tolerance", "floating_end.seat_tolerance", "drive.fit")},
+    "actuator.fixed_end.locknut_tolerance": bad_choice(("4h", "6e", "6f", "6g", "6h", "8g")),
+    "actuator.drive.kind": bad_choice(("key", "flat")),
+    "actuator.nut_mount.kind": bad_choice(("flange",)),
+    "actuator.nut_mount.bolt": st.sampled_from(["M7", "M30", "", "6"]),
+    "actuator.nut_mount.bolt_count": st.one_of(st.integers(-5, 2), st.integers(25, 100), st.floats(3, 24)),
     # the optional [supports] and [rating] sections
     "supports.unsupported_length_mm": out_of(0.01, 1e7),
     "supports.critical_speed_ends": bad_choice(("fixed-fixed", "fixed-supported", "supported-supported", "fixed-free")),
@@ -160,6 +182,8 @@ def test_every_design_field_has_an_invalid_case():
     leaves |= {"roller.pitch_list_mm", "nut.pitch_list_mm"}  # optional, absent by default
     leaves |= {"gears.module_mm", "gears.face_width_mm"}        # absent: by the sizing rule
     leaves |= {"mechanism.journal_diameter_mm", "mechanism.carrier_thickness_mm", "mechanism.ring_bore_mm"}
+    leaves |= {k for k in FIELD_COMMENTS if k.startswith("actuator.")}          # absent: by the rules
+    leaves |= {"screw.length_mm"}                  # absent for an actuator: from the stroke
     leaves |= {f"tolerances.{f.name}" for f in dataclasses.fields(Tolerances)}  # optional section
     leaves |= {f"supports.{f.name}" for f in dataclasses.fields(Supports)}      # optional section
     leaves |= {f"rating.{f.name}" for f in dataclasses.fields(RatingSettings)}  # optional section

@@ -80,9 +80,16 @@ def test_nominal_check_queries_only_the_pairs_with_the_new_screw(checks):
     assert checks["counts"]["nominal"] == (len(with_screw), 1)
     nominal = checks["nominal"]
     assert nominal["pairs_checked"] == checks["corrected"]["pairs_checked"]
-    # the nominal screw interferes; the roller-nut contacts are reused, not lost
+    # the nominal screw interferes; the contacts without the screw (roller-nut flanks, the
+    # actuator's bearing pair) are reused, not lost; the screw's own contacts (the bearings on
+    # the shoulders at its thread's end faces) are queried again and found again
     assert nominal["found"]
-    assert nominal["contact_within_tolerance"] == checks["corrected"]["contact_within_tolerance"]
+    rows = {name: checks[name]["contact_within_tolerance"] for name in ("corrected", "nominal")}
+    assert [r for r in rows["nominal"] if "screw" not in r["pair"]] == \
+        [r for r in rows["corrected"] if "screw" not in r["pair"]]
+    assert [r["pair"] for r in rows["nominal"] if "screw" in r["pair"]] == \
+        [r["pair"] for r in rows["corrected"] if "screw" in r["pair"]] == \
+        [["screw", "bearing_fixed_0"], ["screw", "bearing_floating_0"]]
 
 
 def test_reused_outcomes_are_those_of_a_check_from_scratch(checks, fresh_nominal):

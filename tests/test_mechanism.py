@@ -12,6 +12,7 @@ from prs_geom.checks.interference import check_assembly
 from prs_geom.checks.mechanism import check_mechanism
 from prs_geom.exports.report import mechanism_section
 from prs_geom.exports.bom import read_parts_list_csv, read_parts_list_xlsx
+from prs_geom.geometry.actuator import actuator_layout
 from prs_geom.geometry.frames import screw_z_range, thread_length
 from prs_geom.geometry.mechanism import layout
 from prs_geom.geometry.profiles import ThreadProfiles
@@ -193,19 +194,34 @@ def test_validate_and_build_refuse_up_front(tmp_path):
 
 
 def test_parts_list_read_back(default_build):
-    """CSV and XLSX read back: 1 screw, z rollers, 1 nut, 2 carriers, 2 retaining rings;
-    each mass is density x volume, and the volumes agree with closed forms within 0.1 %
-    (thread volumes: the exact constant-pitch formula; gears: their meshes)."""
+    """CSV and XLSX read back: 1 screw, z rollers, 1 nut, 2 carriers, 2 retaining rings and
+    the actuator's purchased parts (no volume, no mass); each mass is density x volume, and the
+    volumes agree with closed forms within 0.1 % (thread volumes: the exact constant-pitch
+    formula; gears: their meshes; the screw ends and the nut flange: cylinders, keyway and
+    bolt holes)."""
     rep, out = default_build.report, default_build.out
     d = default_design()
     lay = layout(d)
+    act = actuator_layout(d)
     csv_rows = read_parts_list_csv((out / "parts_list.csv").read_text(encoding="utf-8"))
     xlsx_rows = read_parts_list_xlsx(out / "parts_list.xlsx")
     assert [(r["part"], int(r["quantity"])) for r in csv_rows] == [
-        ("screw", 1), ("roller", d.roller.count), ("nut", 1), ("carrier", 2), ("retaining ring", 2)]
+        ("screw", 1), ("roller", d.roller.count), ("nut", 1), ("carrier", 2), ("retaining ring", 2),
+        ("bearing, fixed end", 2), ("bearing, floating end", 1), ("locknut", 1), ("shaft ring", 1),
+        ("flange bolt", 6), ("drive key", 1)]
     assert [(r["part"], r["quantity"]) for r in xlsx_rows] == [(r["part"], int(r["quantity"])) for r in csv_rows]
     by_part = {r["part"]: r for r in csv_rows}
+    # the catalogue designations of the default actuator (ISO 15, ISO 2982-2, DIN 471, ISO 4762
+    # with 8 mm flange + 1.5 x 5 mm = 15.5 -> 16 mm, DIN 6885-1 for a 16 mm journal)
+    assert [by_part[p]["designation"] for p in ("bearing, fixed end", "bearing, floating end", "locknut",
+                                                "shaft ring", "flange bolt", "drive key")] == [
+        "7204 B", "6204", "KM 4", "DIN 471 - 20 x 1.2", "ISO 4762 M5 x 16 - 8.8", "DIN 6885 A 5 x 5 x 22"]
+    made = [(r, x) for r, x in zip(csv_rows, xlsx_rows) if r["material"] != "purchased"]
+    assert len(made) == 5
     for r, x in zip(csv_rows, xlsx_rows):
+        if r["material"] == "purchased":
+            assert r["volume_mm3"] == r["mass_kg"] == r["density_kg_m3"] == "" and x["mass_kg"] is None
+    for r, x in made:
         rho, vol, mass = float(r["density_kg_m3"]), float(r["volume_mm3"]), float(r["mass_kg"])
         assert mass == pytest.approx(rho * vol * 1e-9, rel=1e-12)
         assert x["mass_kg"] == pytest.approx(mass, rel=1e-12)
@@ -230,17 +246,37 @@ def test_parts_list_read_back(default_build):
 
     lo, hi = screw_z_range(d)
     screw_prof = theoretical_screw(d).profile
-    screw = analytic_thread_volume(screw_prof, hi - lo) - datum(screw_prof, lo)
+    # the ends: their steps (the run-out cylinders lie in the thread and fill its datum slot)
+    # less the drive keyway, b t1 (l - b) + pi b^2 / 4 t1 less the journal's curvature over it
+    key, (k0, k1) = act.ends[0].key, act.ends[0].key_z
+    b, t1, r_j = key.width_mm, key.shaft_depth_mm, 0.5 * act.ends[0].steps[-1].diameter_mm
+    a = 0.5 * b
+    section = a * math.sqrt(r_j ** 2 - a ** 2) + r_j ** 2 * math.asin(a / r_j) - b * (r_j - t1)
+    keyway = section * (k1 - k0 - b) + math.pi * a * a * t1     # the dome over its round ends: ~2 mm^3
+    steps = sum(math.pi * (0.5 * st.diameter_mm) ** 2 * (st.z[1] - st.z[0]) for e in act.ends for st in e.steps)
+    # the run-outs (wheel exits on the screw, chamfers on roller and nut): their own closed
+    # form, tested against an independent quadrature in tests/test_thread_run_outs.py
+    from prs_geom.mesh.assembly import design_run_outs
+    from prs_geom.mesh.thread import run_out_volume
+
+    def run_outs(part, profile):
+        return sum(run_out_volume(profile, ro) for ro in design_run_outs(d, part))
+
+    screw = analytic_thread_volume(screw_prof, hi - lo) + steps - keyway + run_outs("screw", screw_prof)
     L = thread_length(d)
     R = 0.5 * d.nut.outer_diameter_mm
     gears = end_gears(d, d.mesh.chord_tolerance_mm)
     roller = (analytic_thread_volume(prof.roller, L) - datum(prof.roller, 0.0) + 2 * lay.journal_volume_mm3
-              + gears["roller_lo"].volume + gears["roller_hi"].volume)
+              + gears["roller_lo"].volume + gears["roller_hi"].volume + run_outs("roller", prof.roller))
     # the nut end overlaps the ring gear's body (an annulus) around the gear: counted once
     overlap = math.pi * (lay.ring_gear_outer_radius_mm ** 2 - lay.nut_end_sleeve_inner_radius_mm ** 2) \
         * lay.gear_face_width_mm
+    # the flange outside the nut end, less its bolt holes
+    m = act.nut_mount
+    flange = (math.pi * (0.25 * m.flange_diameter_mm ** 2 - lay.nut_end_outer_radius_mm ** 2)
+              - m.bolt_count * math.pi * (0.5 * m.bolt.clearance_hole_mm) ** 2) * (m.z[1] - m.z[0])
     nut = (analytic_thread_volume(prof.nut, L, R) - datum(prof.nut, 0.0, R) + 2 * lay.nut_end_volume_mm3
-           + gears["ring_lo"].volume + gears["ring_hi"].volume - 2 * overlap)
+           + gears["ring_lo"].volume + gears["ring_hi"].volume - 2 * overlap + flange + run_outs("nut", prof.nut))
     for part, exact in (("screw", screw), ("roller", roller), ("nut", nut), ("carrier", lay.carrier_volume_mm3),
                         ("retaining ring", lay.ring_volume_mm3)):
         rho = float(by_part[part]["density_kg_m3"])

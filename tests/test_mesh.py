@@ -8,7 +8,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from prs_geom.geometry.frames import part_warps, thread_length
+from prs_geom.geometry.frames import part_warps, screw_thread_length, thread_length
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.mesh.assembly import build_part
 from prs_geom.analysis.contact import PartFlanks
 from prs_geom.model.design import PRSDesign, Roller, Nut, Screw, Thread, default_design
@@ -57,6 +58,8 @@ def reference_volume(tm, n_theta=20000, n_u=200001):
 
 
 def check_part(tm, tol):
+    # the thread alone (built with run_outs=()): the actuator's run-outs are tested in
+    # tests/test_thread_run_outs.py against their own closed form
     # a small part is meshed finer than asked (volume accuracy, part_chord_tolerance)
     assert tm.chord_tolerance <= tol
     tol = tm.chord_tolerance
@@ -79,10 +82,10 @@ def check_part(tm, tol):
 @pytest.mark.parametrize("part", ["screw", "roller", "nut"])
 def test_default_parts_closed_accurate_and_of_right_volume(part, tol):
     d = default_design()
-    tm = build_part(d, part, tol)
+    tm = build_part(d, part, tol, run_outs=())
     m, ref = check_part(tm, tol)
     # the tabulated reference agrees with the closed-form thread volume
-    length = {"screw": d.screw.length_mm}.get(part, thread_length(d))
+    length = {"screw": screw_thread_length(d)}.get(part, thread_length(d))
     closed = analytic_thread_volume(tm.profile, length, tm.body_radius) - tm.datum_mark.volume
     assert ref == pytest.approx(closed, rel=1e-8)
 
@@ -90,7 +93,7 @@ def test_default_parts_closed_accurate_and_of_right_volume(part, tol):
 @pytest.mark.parametrize("part", ["roller", "nut"])
 def test_graded_parts_closed_accurate_and_of_right_volume(part):
     d = load_design(EXAMPLES / "graded-pitch.toml")
-    tm = build_part(d, part, 0.01)
+    tm = build_part(d, part, 0.01, run_outs=())
     assert not tm.warp.is_identity
     check_part(tm, 0.01)
 
@@ -99,7 +102,7 @@ def test_graded_parts_closed_accurate_and_of_right_volume(part):
 @given(standard_designs(max_teeth=10, pitch_lists=True), st.sampled_from([0.02, 0.005]))
 def test_sampled_designs_give_closed_accurate_meshes(d, tol):
     for part in ("screw", "roller", "nut"):
-        check_part(build_part(d, part, tol), tol)
+        check_part(build_part(d, part, tol, run_outs=()), tol)
 
 
 def flank_positions(tm, theta, radius):
@@ -122,7 +125,7 @@ def analytic_flanks(tm, theta, radius):
 def test_graded_roller_flanks_sit_at_listed_pitches(theta):
     pl = tuple(2.0 + 1e-3 * math.sin(0.9 * j) + 4e-4 * j / 19 for j in range(19))
     d = PRSDesign(roller=Roller(pitch_list_mm=pl))
-    tm = build_part(d, "roller", 0.01)
+    tm = build_part(d, "roller", 0.01, run_outs=())
     r = tm.profile.pitch_radius
     zm = flank_positions(tm, theta, r)
     za = analytic_flanks(tm, theta, r)
@@ -143,7 +146,7 @@ def test_graded_roller_flanks_sit_at_listed_pitches(theta):
 def test_graded_nut_flanks_sit_at_listed_pitches():
     pl = tuple(2.0 + 5e-4 * (19 - j) / 19 + 2e-4 * math.cos(j) for j in range(19))
     d = PRSDesign(nut=Nut(pitch_list_mm=pl))
-    tm = build_part(d, "nut", 0.01)
+    tm = build_part(d, "nut", 0.01, run_outs=())
     r = tm.profile.pitch_radius
     z = flank_positions(tm, 0.0, r)
     za = analytic_flanks(tm, 0.0, r)
@@ -158,8 +161,8 @@ def test_graded_nut_flanks_sit_at_listed_pitches():
 
 
 def test_left_hand_thread_winds_the_other_way():
-    right = build_part(default_design(), "screw", 0.01)
-    left = build_part(PRSDesign(thread=Thread(hand="left")), "screw", 0.01)
+    right = build_part(default_design(), "screw", 0.01, run_outs=())
+    left = build_part(PRSDesign(thread=Thread(hand="left")), "screw", 0.01, run_outs=())
     r = right.profile.pitch_radius
     dtheta = 0.3
     shift = right.profile.lead * dtheta / (2 * math.pi)
@@ -176,15 +179,15 @@ def test_left_hand_thread_winds_the_other_way():
 def test_tessellation_follows_tolerance():
     d = default_design()
     # the nut: the roller is meshed finer than 0.01 mm anyway (part_chord_tolerance)
-    coarse = build_part(d, "nut", 0.01)
-    fine = build_part(d, "nut", 0.001)
+    coarse = build_part(d, "nut", 0.01, run_outs=())
+    fine = build_part(d, "nut", 0.001, run_outs=())
     assert fine.meta["columns_per_turn"] > 2.5 * coarse.meta["columns_per_turn"]
     assert measure_deviation(fine)["max_deviation_mm"] < measure_deviation(coarse)["max_deviation_mm"] / 5
 
 
 @pytest.mark.parametrize("part", ["screw", "roller", "nut"])
 def test_end_faces_are_planar_and_contain_corner_points(part):
-    tm = build_part(default_design(), part, 0.01)
+    tm = build_part(default_design(), part, 0.01, run_outs=())
     prof = tm.profile
     cap = np.isin(tm.face_kind, [FACE_END_LO, FACE_END_HI, FACE_BODY])
     z = tm.vertices[tm.faces[cap]][:, :, 2]
@@ -263,6 +266,7 @@ def flank_angle_designs(draw, max_teeth: int = 6, pitch_lists: bool = True) -> P
             roller=Roller(pitch_diameter_mm=roller_d, count=1, pitch_list_mm=rl),
             nut=Nut(pitch_diameter_mm=starts * roller_d, starts=starts, outer_diameter_mm=outer_d,
                     pitch_list_mm=nl),
+            actuator=ActuatorSettings(enabled=False),      # the threads alone (see strategies.py)
         )
     except DesignError:
         assume(False)
@@ -271,7 +275,7 @@ def flank_angle_designs(draw, max_teeth: int = 6, pitch_lists: bool = True) -> P
 def assert_within_tolerance(d: PRSDesign, tol: float | None = None) -> None:
     tol = tol or d.mesh.chord_tolerance_mm
     for part in ("screw", "roller", "nut"):
-        dev = measure_deviation(build_part(d, part, tol))
+        dev = measure_deviation(build_part(d, part, tol, run_outs=()))
         assert dev["max_deviation_mm"] <= tol, (part, d.thread, dev)
 
 
@@ -291,11 +295,12 @@ def test_deviation_within_tolerance_over_the_flank_angle_range_heavy(d, tol):
 @pytest.mark.parametrize("hand", ["right", "left"])
 @pytest.mark.parametrize("beta", [10.0, 45.0, 70.0, 75.0, 80.0])
 def test_default_sizes_within_tolerance_at_flank_angle(beta, hand):
+    # the thread alone: at 75 and 80 deg no gear pair fits, so no mechanism and no actuator
     d = PRSDesign(thread=Thread(flank_half_angle_deg=beta, engaged_teeth=4, hand=hand),
-                  roller=Roller(count=3))     # 10 rollers of the deeper 10 deg thread overlap
+                  roller=Roller(count=3), actuator=ActuatorSettings(enabled=False))
     tol = d.mesh.chord_tolerance_mm
     for part in ("screw", "roller", "nut"):
-        row = mesh_report(build_part(d, part))
+        row = mesh_report(build_part(d, part, run_outs=()))
         assert row["max_deviation_mm"] <= tol, (part, row["deviation_mm"])
         assert row["warnings"] == []
         assert row["watertight"] and row["manifold"]
@@ -308,8 +313,8 @@ def test_profile_distance_is_the_distance_on_steep_flanks(part, beta):
     the axial-section measure must not under-report (it claims an upper bound of the 3D
     distance) and must not over-report by more than the 1/cos of the normal's tilt out
     of the axial half-plane (< 1 %)."""
-    d = PRSDesign(thread=Thread(flank_half_angle_deg=beta, engaged_teeth=4))
-    tm = build_part(d, part)
+    d = PRSDesign(thread=Thread(flank_half_angle_deg=beta, engaged_teeth=4), actuator=ActuatorSettings(enabled=False))
+    tm = build_part(d, part, run_outs=())
     prof = tm.profile
     assert prof.hand_sign == 1  # right hand: part frame = the frame of profile_distance
     fl = PartFlanks(prof, tm.warp)
@@ -346,7 +351,7 @@ def test_thin_nut_end_faces_stay_within_tolerance(beta, pitch, roller_d, starts,
                   roller=Roller(pitch_diameter_mm=roller_d, count=1),
                   nut=Nut(pitch_diameter_mm=starts * roller_d, starts=starts,
                           outer_diameter_mm=outer_d or 1.001 * root_d))
-    tm = build_part(d, "nut", tol)
+    tm = build_part(d, "nut", tol, run_outs=())
     dev = measure_deviation(tm)
     assert dev["max_deviation_end_face_mm"] <= tol, dev
     assert dev["max_deviation_mm"] <= tol, dev
@@ -357,7 +362,7 @@ def test_thin_nut_end_faces_stay_within_tolerance(beta, pitch, roller_d, starts,
 
 def test_mesh_report_warns_when_the_deviation_exceeds_the_tolerance():
     d = PRSDesign(thread=Thread(engaged_teeth=4))
-    tm = build_part(d, "roller", 0.01)
+    tm = build_part(d, "roller", 0.01, run_outs=())
     row = mesh_report(tm)
     assert row["warnings"] == []
     dev = row["deviation_mm"]["body"]
@@ -381,7 +386,7 @@ def test_deviation_in_chunks_equals_deviation_at_once(monkeypatch):
     same to the bit (every distance is per point)."""
     import prs_geom.mesh.thread as thread
 
-    tm = build_part(default_design(), "nut", 0.01)
+    tm = build_part(default_design(), "nut", 0.01, run_outs=())
     whole = thread.measure_deviation(tm)
     monkeypatch.setattr(thread, "DEVIATION_CHUNK_FACES", 997)
     assert len(tm.faces) > 10 * 997

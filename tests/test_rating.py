@@ -501,12 +501,16 @@ def test_readme_rating_example_is_what_the_command_prints():
 # --------------------------------------------------------------------------- limit checks (issue 28)
 def _by_hand_limits():
     """The default design's limits from the formulas of docs/theory/ratings.md (DOMAIN 7), by
-    hand: root d = 24 - 1.6 x 0.5 = 23.2 mm, L = (20 + 4) x 2 = 48 mm, fixed-supported
-    (lambda 3.926602312, k 0.699), E 212000 MPa, rho 7.85e-9 t/mm^3."""
-    d, L, E = 23.2, 48.0, 212_000.0
-    n_cr = 60.0 / (2 * math.pi) * (3.926602312 / L) ** 2 * math.sqrt(E * (math.pi * d ** 4 / 64)
-                                                                     / (7.85e-9 * math.pi * d ** 2 / 4))
-    F_k = math.pi ** 2 * E * (math.pi * d ** 4 / 64) / (0.699 * L) ** 2
+    hand: root d = 24 - 1.6 x 0.5 = 23.2 mm, fixed-supported (lambda 3.926602312, k 0.699),
+    E 212000 MPa, rho 7.85e-9 t/mm^3; the actuator's spans (docs/theory/actuator.md): whirl
+    between the 7204 B pair's middle z = -94.75 and the 6204's middle z = 127.75, L = 222.5 mm;
+    buckling from -94.75 to the nut thread's far end at the upper stroke end, 40 + 50 = 90 mm,
+    L = 184.75 mm."""
+    d, E = 23.2, 212_000.0
+    L_cr, L_b = 127.75 + 94.75, 90.0 + 94.75
+    n_cr = 60.0 / (2 * math.pi) * (3.926602312 / L_cr) ** 2 * math.sqrt(E * (math.pi * d ** 4 / 64)
+                                                                        / (7.85e-9 * math.pi * d ** 2 / 4))
+    F_k = math.pi ** 2 * E * (math.pi * d ** 4 / 64) / (0.699 * L_b) ** 2
     return {"speed": 150_000.0 / 24.0, "dn": 150_000.0, "critical_speed": 0.8 * n_cr, "buckling": F_k / 2.0,
             "static_safety": 2.0}
 

@@ -10,13 +10,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+from prs_geom.geometry.actuator import actuator_layout
 import trimesh
 
 from readers import khronos_issues, read_3mf, solid, stl_merged
 from prs_geom.exports.meshes import stl_bytes, write_stl_pieces
 from prs_geom.exports.scene import split_normals
+from prs_geom.geometry.actuator import actuator_layout
+from prs_geom.geometry.datum import datum_mark
 from prs_geom.geometry.frames import roller_transform
 from prs_geom.geometry.mechanism import layout
+from prs_geom.geometry.profiles import ThreadProfiles
 from prs_geom.mesh.thread import axial_line_crossings
 from prs_geom.model.design import default_design
 from prs_geom.model.io import design_hash
@@ -44,8 +49,12 @@ def test_exported_screw_is_the_theoretical_one(built):
         assert r.max() == pytest.approx(0.5 * d.screw.major_diameter_mm, abs=1e-5)   # float32 in STL
         # the line (r_pitch, 0, z) pierces the flanks of the section at theta = 0
         xs = axial_line_crossings(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces), r_pitch, 0.0)
+        # on the full-depth thread (the run-outs fill the groove toward the screw's ends), and
+        # whole widths only (the first and last crossing there cut a tooth or groove anywhere)
+        full = actuator_layout(d).full_thread_z
+        xs = xs[(xs > full[0]) & (xs < full[1])]
         assert len(xs) > 20
-        widths = np.diff(np.sort(xs))
+        widths = np.diff(np.sort(xs))[1:-1]
         # 5-start screw, pitch p: the section shows every pitch p/2 + p/2 (the chord error of
         # the 0.01 mm mesh moves a crossing by at most tol / tan(beta) = 0.01 mm)
         np.testing.assert_allclose(widths, 0.5 * d.thread.pitch_mm, atol=0.012)
@@ -124,14 +133,14 @@ def test_glb_is_metres_y_up_named_with_materials_and_normals(built):
     scene = trimesh.load(out / "assembly.glb")          # an independent reader applies the nodes
     lo, hi = scene.bounds
     ext = hi - lo
-    # metres: the nut's outer diameter across x and z, the screw length along +Y (the axis)
-    assert ext[0] == pytest.approx(d.nut.outer_diameter_mm * 1e-3, rel=1e-3)
-    assert ext[2] == pytest.approx(d.nut.outer_diameter_mm * 1e-3, rel=1e-3)
-    # along the axis: the nut with its ends (docs/theory/mechanism.md), longer than the screw
-    lay = layout(d)
-    length = max(d.screw.length_mm, lay.ends[1].nut_end[1] - lay.ends[0].nut_end[0])
-    assert length == pytest.approx(71.5)
-    assert ext[1] == pytest.approx(length * 1e-3, rel=1e-3)
+    # metres: the actuator's nut flange (the widest part) across x and z, the screw from end
+    # face to end face along +Y (the axis): the actuator's parts reach beyond the nut's ends
+    act = actuator_layout(d)
+    assert act.nut_mount.flange_diameter_mm == 76.0 > d.nut.outer_diameter_mm
+    assert ext[0] == pytest.approx(act.nut_mount.flange_diameter_mm * 1e-3, rel=1e-3)
+    assert ext[2] == pytest.approx(act.nut_mount.flange_diameter_mm * 1e-3, rel=1e-3)
+    assert act.screw_length_mm == pytest.approx(283.3)
+    assert ext[1] == pytest.approx(act.screw_length_mm * 1e-3, rel=1e-3)
     names = {n["name"] for n in doc["nodes"]}
     assert {"screw", "nut"} | {f"roller_{k}" for k in range(d.roller.count)} <= names
     roller_meshes = {n["mesh"] for n in doc["nodes"] if n["name"] in {f"roller_{k}" for k in range(d.roller.count)}}
@@ -226,16 +235,32 @@ def test_assembly_stl_is_closed_and_holds_every_part(built):
     vols = {name: trimesh.Trimesh(V, F, process=False).volume for name, (V, F) in m["objects"].items()}
     total = sum(vols[m["item_object"][item]] for item in m["items"])
     # the 3MF items overlap where each nut end sleeve grips its ring gear's body (an
-    # annulus, docs/theory/mechanism.md); assembly.stl unites the nut's parts and counts it once
-    # (measured on the 3MF meshes read back; the closed form of the true circles agrees to 0.1 %)
-    lay = layout(d)
-    overlap = 0.0
-    for side in ("lo", "hi"):
-        a, b = (m["objects"][m["item_object"][f"{part}_{side}"]] for part in ("nut_end", "nut_ring_gear"))
-        overlap += (solid(*a) ^ solid(*b)).volume()
+    # annulus, docs/theory/mechanism.md), where the nut flange grips the lower nut end (an
+    # annulus 0.5 mm thick) and where each screw end's run-out cylinder lies in the thread;
+    # assembly.stl unites the parts of a body and counts each once (measured on the 3MF meshes
+    # read back; the closed forms of the true circles agree to 0.1 %)
+    lay, act = layout(d), actuator_layout(d)
+
+    def overlap_of(one: str, other: str) -> float:
+        a, b = (m["objects"][m["item_object"][item]] for item in (one, other))
+        return (solid(*a) ^ solid(*b)).volume()
+
+    gear = sum(overlap_of(f"nut_end_{side}", f"nut_ring_gear_{side}") for side in ("lo", "hi"))
     exact = math.pi * (lay.ring_gear_outer_radius_mm ** 2 - lay.nut_end_sleeve_inner_radius_mm ** 2) \
         * lay.gear_face_width_mm
-    assert overlap == pytest.approx(2 * exact, rel=1e-3)
+    assert gear == pytest.approx(2 * exact, rel=1e-3)
+    flange = overlap_of("nut_end_lo", "nut_flange")
+    R, t = lay.nut_end_outer_radius_mm, act.nut_mount.z[1] - act.nut_mount.z[0]
+    # a thin annulus: its two polygons (1 um chords) each move its area by up to 1 um x perimeter
+    assert flange == pytest.approx(math.pi * (R ** 2 - (R - 0.5) ** 2) * t, abs=2 * math.pi * (2 * R - 0.5) * t * 1e-3)
+    ends = overlap_of("screw", "screw_end_lo") + overlap_of("screw", "screw_end_hi")
+    # the run-out cylinders (root radius less the chord tolerance), less the datum slot of
+    # screw.stl's face A that the lower one fills
+    r_ro = 0.5 * d.screw.minor_diameter_mm - max(0.01, d.mesh.chord_tolerance_mm)
+    slot = datum_mark(ThreadProfiles.from_design(d).screw, act.thread_z[0]).volume
+    run_outs = sum(math.pi * r_ro ** 2 * (e.run_out[1] - e.run_out[0]) for e in act.ends)
+    assert ends == pytest.approx(run_outs - slot, rel=1e-3)
+    overlap = gear + flange + ends
     assert abs(stl.volume - (total - overlap)) <= stl.area * 4e-6, (stl.volume, total)
 
 

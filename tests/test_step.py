@@ -122,10 +122,11 @@ def classify(shape, xyz) -> str:
 
 def short(design, teeth: int):
     """``design`` with ``teeth`` engaged teeth (pitch lists cut to match, screw length to
-    the default (n + 4) p)."""
+    the default (n + 4) p, so without the actuator, whose screw is far longer)."""
     t, s, r, n = design.thread, design.screw, design.roller, design.nut
     cut = (lambda lst: None if lst is None else tuple(lst[:teeth - 1]))
     return design.with_changes(thread=dataclasses.replace(t, engaged_teeth=teeth),
+                               actuator=dataclasses.replace(design.actuator, enabled=False),
                                screw=dataclasses.replace(s, length_mm=(teeth + 4) * t.pitch_mm),
                                roller=dataclasses.replace(r, pitch_list_mm=cut(r.pitch_list_mm)),
                                nut=dataclasses.replace(n, pitch_list_mm=cut(n.pitch_list_mm)))

@@ -1,9 +1,11 @@
-"""Render docs/img/assembly.png: the default design's assembly with its end gears.
+"""Render docs/img/assembly.png: the default actuator (nut at mid-stroke) with its end gears.
 
 Run from the repository root: ``.venv/bin/python docs/img/assembly.py`` (needs chromium).
 The picture is drawn by the project's own report viewer (three.js in headless chromium) on
 the assembly at the report's display tolerance, the nut cut open, seen from the loaded end
-at an angle so that the roller gears and a ring gear show.
+at an angle so that the roller gears and a ring gear show; the whole screw with its ends and
+bearings fits the picture (the viewer's bounding-box fit), so the stroke the threads leave
+the nut on either side shows.
 """
 import json
 import shutil
@@ -24,7 +26,7 @@ def main() -> None:
     root = Path(__file__).resolve().parents[2]
     d = default_design()
     payload = scene_payload(d, screw_profile=analyse_contact(d).screw_profile)
-    payload["view"] = {"direction": [0.85, -0.35, 0.9], "fit": 0.8}
+    payload["view"] = {"direction": [0.35, 0.45, 1.0]}
     three = three_js()
     body = ("<div id='errors'></div><canvas id='view' width='900' height='560'></canvas>"
             "<div id='viewinfo' style='display:none'></div>"

@@ -93,6 +93,7 @@ __all__ = ["LP_C", "LP_H", "WEIBULL_E", "LP_BALL_CONSTANT", "A1_TABLE", "END_CAS
            "static_load_rating", "system_life", "hertz_pressure", "efficiency", "drive_torque", "critical_speed",
            "buckling_load", "double_nut", "LIMIT_CHECKS", "LimitCheck", "limit_check", "limit_checks",
            "RatingCase", "rating_case", "VariantLife", "RatingStiffness", "RatingLimits", "RatingCurves",
+           "ResolvedSupports", "resolve_supports",
            "RatingResult", "analyse_rating", "CURVE_FRACTIONS"]
 
 #: Lundberg-Palmgren exponents of point contact: stress c, depth h, Weibull slope e; they
@@ -795,6 +796,65 @@ def _stiffness(design: PRSDesign, model: LoadModel, rs: RatingSettings,
 
 
 @dataclass(frozen=True)
+class ResolvedSupports:
+    """The free lengths (mm) and end fixities the critical speed and buckling use, where
+    they came from (``source``: "geometry", "design file" or "geometry, overridden by the
+    design file"; ``rule``: how the geometry gave them) and one warning per ``[supports]``
+    value that overrides a different value of the geometry. ``length_field`` names the
+    design field an out-of-range rating blames."""
+
+    critical_speed_length_mm: float
+    critical_speed_ends: str
+    buckling_length_mm: float
+    buckling_ends: str
+    source: str
+    rule: str
+    warnings: tuple[str, ...]
+    length_field: str
+
+
+def resolve_supports(design: PRSDesign) -> ResolvedSupports:
+    """The screw's supports for the ratings: from the actuator geometry
+    (:func:`prs_geom.geometry.actuator.support_spans`) with the ``[supports]`` values given
+    in the design file overriding it (each with a warning when it differs), or, without an
+    actuator, the ``[supports]`` values with ``screw.length_mm`` and "fixed-supported" for
+    what is absent."""
+    from prs_geom.geometry.actuator import actuator_layout
+
+    sup = design.supports or Supports()
+    lay = actuator_layout(design)
+    if lay is None:
+        length = sup.unsupported_length_mm if sup.unsupported_length_mm is not None else design.screw.length_mm
+        fld = "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None else "screw.length_mm"
+        return ResolvedSupports(length, sup.critical_speed_ends or "fixed-supported", length,
+                                sup.buckling_ends or "fixed-supported", "design file",
+                                "supports.unsupported_length_mm, else the screw's threaded length", (), fld)
+    geo = lay.supports
+    given = {"critical_speed_length_mm": sup.unsupported_length_mm, "buckling_length_mm": sup.unsupported_length_mm,
+             "critical_speed_ends": sup.critical_speed_ends, "buckling_ends": sup.buckling_ends}
+    fields = {"critical_speed_length_mm": "supports.unsupported_length_mm",
+              "buckling_length_mm": "supports.unsupported_length_mm",
+              "critical_speed_ends": "supports.critical_speed_ends", "buckling_ends": "supports.buckling_ends"}
+    words = {"critical_speed_length_mm": "the critical speed's span", "buckling_length_mm": "the buckling span",
+             "critical_speed_ends": "the critical speed's end fixity", "buckling_ends": "the buckling end fixity"}
+    values, warns = {}, []
+    for key, value in given.items():
+        geometric = getattr(geo, key)
+        values[key] = geometric if value is None else value
+        if value is not None and value != geometric:
+            shown = f"{value:g} mm" if isinstance(value, float) else f'"{value}"'
+            geo_shown = f"{geometric:.6g} mm" if isinstance(geometric, float) else f'"{geometric}"'
+            warns.append(f"{fields[key]} = {shown} overrides {words[key]} from the actuator geometry ({geo_shown}: "
+                         f"{geo.rule}); remove it from [supports] to rate the actuator as laid out")
+    overridden = any(v is not None for v in given.values())
+    return ResolvedSupports(values["critical_speed_length_mm"], values["critical_speed_ends"],
+                            values["buckling_length_mm"], values["buckling_ends"],
+                            "geometry, overridden by the design file" if overridden else "geometry", geo.rule,
+                            tuple(warns), "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None
+                            else "actuator.stroke_mm")
+
+
+@dataclass(frozen=True)
 class RatingLimits:
     """Speed and buckling limits and the drive: free screw length and root diameter (mm),
     critical speed (first whirling speed), its permissible fraction, d n speed limit and the
@@ -802,7 +862,7 @@ class RatingLimits:
     Euler buckling load and the permissible load (N), the d n limit (mm/min), lead (mm),
     :func:`efficiency` result, drive and back-drive torque at the largest load (N m)."""
 
-    free_length_mm: float
+    supports: "ResolvedSupports"
     root_diameter_mm: float
     critical_speed_rpm: float
     permissible_critical_speed_rpm: float
@@ -818,6 +878,11 @@ class RatingLimits:
     back_drive_torque_nm: float
 
     @property
+    def free_length_mm(self) -> float:
+        """The free length of the critical speed (mm)."""
+        return self.supports.critical_speed_length_mm
+
+    @property
     def speed_ok(self) -> bool:
         """The largest duty speed is within the permissible speed."""
         return bool(self.max_speed_rpm <= self.permissible_speed_rpm)
@@ -828,18 +893,17 @@ def _limits(design: PRSDesign, rs: RatingSettings, sup: Supports, max_load_n: fl
     """Critical speed, buckling, speed limits, efficiency and torques."""
     E_s = design.materials.screw.youngs_modulus_mpa
     d_root = design.screw.minor_diameter_mm
-    L_free = sup.unsupported_length_mm if sup.unsupported_length_mm is not None else design.screw.length_mm
-    L_field = "supports.unsupported_length_mm" if sup.unsupported_length_mm is not None else "screw.length_mm"
-    n_cr = _finite(lambda: critical_speed(d_root, L_free, sup.critical_speed_ends, E_s), L_field, L_free,
-                   "gives a critical speed out of floating-point range")
-    F_buck = _finite(lambda: buckling_load(d_root, L_free, sup.buckling_ends, E_s), L_field, L_free,
-                     "gives a buckling load out of floating-point range")
+    res = resolve_supports(design)
+    n_cr = _finite(lambda: critical_speed(d_root, res.critical_speed_length_mm, res.critical_speed_ends, E_s),
+                   res.length_field, res.critical_speed_length_mm, "gives a critical speed out of floating-point range")
+    F_buck = _finite(lambda: buckling_load(d_root, res.buckling_length_mm, res.buckling_ends, E_s),
+                     res.length_field, res.buckling_length_mm, "gives a buckling load out of floating-point range")
     n_dn = rs.dn_limit_mm_rpm / design.screw.pitch_diameter_mm
     n_perm = min(sup.critical_speed_factor * n_cr, n_dn)
     lead = design.screw.starts * design.thread.pitch_mm
     eff = efficiency(lead, design.screw.pitch_diameter_mm, rs.friction_coefficient, design.thread.beta)
     T_back = max_load_n * lead * eff["back_driving"] / (2.0 * math.pi) / 1e3
-    return RatingLimits(free_length_mm=L_free, root_diameter_mm=d_root, critical_speed_rpm=n_cr,
+    return RatingLimits(supports=res, root_diameter_mm=d_root, critical_speed_rpm=n_cr,
                         permissible_critical_speed_rpm=sup.critical_speed_factor * n_cr, buckling_load_n=F_buck,
                         permissible_buckling_load_n=F_buck / sup.buckling_safety, dn_limit_mm_rpm=rs.dn_limit_mm_rpm,
                         dn_speed_limit_rpm=n_dn, permissible_speed_rpm=n_perm, max_speed_rpm=max_speed_rpm,

@@ -31,7 +31,7 @@ from prs_geom.mesh.thread import from_manifold, to_manifold
 from prs_geom.analysis.contact import theoretical_screw
 from prs_geom.model.design import PRSDesign
 from prs_geom.checks.fcl import bvh_model
-from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, check_windows
+from prs_geom.mesh.budget import CHECK_TOLERANCE_MM, check_span, check_windows
 from prs_geom.runtime.progress import ProgressFn, silent
 
 __all__ = [
@@ -244,7 +244,7 @@ def interference(design: PRSDesign, screw: str = "corrected", tol: float | None 
     when not given). A design longer than :data:`~prs_geom.mesh.budget.CHECK_WINDOW_TEETH` teeth is checked in
     axial windows (:func:`windowed_interference_checks`) unless ``tol`` is given.
     """
-    if tol is None and check_windows(design) is not None:
+    if tol is None and (check_windows(design) is not None or check_span(design) is not None):
         return _windowed(design, _corrected_profile(design, screw, screw_profile), progress, (screw,))[screw]
     return _interference(design, screw, tol, progress, screw_profile)[0]
 
@@ -274,7 +274,7 @@ def interference_checks(design: PRSDesign, screw_profile: ThreadProfile,
     A design longer than :data:`~prs_geom.mesh.budget.CHECK_WINDOW_TEETH` teeth is checked window by window
     (:func:`check_windows`, :func:`windowed_interference_checks`).
     """
-    if check_windows(design) is not None:
+    if check_windows(design) is not None or check_span(design) is not None:
         return windowed_interference_checks(design, screw_profile, progress)
     cache: dict[str, dict[Any, Any]] = {}
     corrected, asm = _interference(design, "corrected", None, progress, screw_profile, cache=cache)
@@ -317,13 +317,15 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
     tol = min(design.mesh.chord_tolerance_mm, CHECK_TOLERANCE_MM)
     windows = check_windows(design) or [(-np.inf, np.inf)]
     margin = design.thread.pitch_mm
+    # an actuator's screw is meshed over the nut assembly only (check_span)
+    span = check_span(design) or (-np.inf, np.inf)
     gear_parts = end_gears(design, tol)
     mech_parts = mechanism_parts(design, tol)
     totals: dict[str, dict[tuple[str, str], _Overlap | None]] = {screw: {} for screw in screws}
     seconds = {screw: 0.0 for screw in screws}
     for i, (lo, hi) in enumerate(windows):
         cache: dict[str, dict[Any, Any]] = {}
-        widened = (lo - margin, hi + margin)
+        widened = (max(lo - margin, span[0]), min(hi + margin, span[1]))
         first: Assembly | None = None
         for screw in screws:
             t0 = time.perf_counter()
@@ -343,7 +345,8 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
         if not set(overlaps) <= set(pairs):   # pragma: no cover - the windows place only scene parts
             raise RuntimeError(f"windowed check met pairs outside the scene: {sorted(set(overlaps) - set(pairs))}")
         section = _section(design, {pair: overlaps.get(pair) for pair in pairs}, tol, seconds[screw])
-        section["axial_windows"] = len(windows)
+        if len(windows) > 1:
+            section["axial_windows"] = len(windows)
         section.update(_screw_fields(design, screw, screw_profile if screw == "corrected" else None))
         out[screw] = section
     return out

@@ -4,9 +4,16 @@ of report.html.
 One row per distinct part: item number (the balloon number of the assembly drawing), part,
 quantity, material and density (``materials.*`` of the design), the volume of one piece
 (:func:`prs_geom.mesh.volumes.part_volumes`: from the meshes of its rigid body, a roller
-with its gears and journals, the nut with its ring gears and ends), the mass of one piece (density x volume)
-and the standard designation where there is one (the DIN 472 retaining ring). Masses are
-in kg, volumes in mm^3; the CSV keeps full float64 precision.
+with its gears and journals, the nut with its ring gears, ends and flange, the screw with
+its ends), the mass of one piece (density x volume) and the standard designation where
+there is one (the DIN 472 retaining ring). Masses are in kg, volumes in mm^3; the CSV keeps
+full float64 precision.
+
+An actuator (:func:`prs_geom.geometry.actuator.actuator_layout`) adds its purchased parts:
+the bearings of each screw end, the KM locknut, the DIN 471 ring, the flange bolts (length
+by the actuator layout's rule) and the drive key, each with its catalogue designation.
+Their material reads :data:`PURCHASED`; density, volume and masses are empty (None in
+report.json): a catalogue part's mass is the supplier's, not a mesh's.
 
 The material names come from the design file as typed: they go through
 :mod:`prs_geom.exports.textsafe` (a CSV field never begins a spreadsheet formula, every text
@@ -16,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -24,9 +32,12 @@ from typing import Any
 from prs_geom.exports.textsafe import csv_comment, csv_field, xlsx_append
 
 __all__ = [
-    "COLUMNS", "PartItem", "PartsListRow", "part_items", "parts_list", "parts_list_csv", "read_parts_list_csv",
-    "read_parts_list_xlsx", "write_parts_list_xlsx",
+    "COLUMNS", "PURCHASED", "PartItem", "PartsListRow", "part_items", "parts_list", "parts_list_csv", "read_parts_list_csv",
+    "read_parts_list_xlsx", "total_mass_kg", "write_parts_list_xlsx",
 ]
+
+#: The material column of a purchased (catalogue) part.
+PURCHASED = "purchased"
 
 #: Columns: key, title, unit.
 COLUMNS = (("item", "item", ""), ("part", "part", ""), ("quantity", "quantity", ""),
@@ -44,18 +55,22 @@ class PartsListRow:
     part: str
     quantity: int
     material: str
-    density_kg_m3: float
-    volume_mm3: float
+    #: None for a purchased part (no mesh volume, no mass)
+    density_kg_m3: float | None
+    volume_mm3: float | None
     designation: str
     description: str
 
     @property
-    def mass_kg(self) -> float:
+    def mass_kg(self) -> float | None:
+        if self.density_kg_m3 is None or self.volume_mm3 is None:
+            return None
         return self.density_kg_m3 * self.volume_mm3 * 1e-9
 
     @property
-    def total_mass_kg(self) -> float:
-        return self.quantity * self.mass_kg
+    def total_mass_kg(self) -> float | None:
+        mass = self.mass_kg
+        return None if mass is None else self.quantity * mass
 
     def as_dict(self) -> dict[str, Any]:
         return {**asdict(self), "mass_kg": self.mass_kg, "total_mass_kg": self.total_mass_kg}
@@ -68,55 +83,123 @@ class PartItem:
     item: int
     part: str
     quantity: int
-    material: Any          # prs_geom.model.design.Material
+    material: Any          # prs_geom.model.design.Material; None for a purchased part
     designation: str
     description: str
-    #: the rigid body (scene name) whose volume is one piece's
-    body: str
+    #: the rigid body (scene name) whose volume is one piece's; None for a purchased part
+    body: str | None
+
+    @property
+    def purchased(self) -> bool:
+        """A catalogue part: no material of the design, no mesh volume."""
+        return self.body is None
+
+
+#: One parts-list line before numbering: part, quantity, material (None: purchased),
+#: designation, description, rigid body (None: purchased).
+_Row = tuple[str, int, Any, str, str, "str | None"]
 
 
 def part_items(design: Any) -> list[PartItem]:
     """The items of the parts list of ``design``, numbered in order: screw, roller, nut and,
-    with the mechanism parts, carrier and retaining ring (the DIN 472 designation)."""
+    with the mechanism parts, carrier and retaining ring (the DIN 472 designation); then an
+    actuator's purchased parts (:func:`_actuator_rows`)."""
+    from prs_geom.geometry.actuator import actuator_layout
+    from prs_geom.geometry.frames import screw_thread_length
     from prs_geom.geometry.mechanism import layout
 
     mats = design.materials
     d = design
     hand = d.thread.hand
-    rows = [
+    act = actuator_layout(design)
+    screw_extra = nut_extra = ""
+    if act is not None:
+        fixed = act.ends[0] if act.fixed_side < 0 else act.ends[1]
+        drive = "keyway" if fixed.key is not None else "flat"
+        screw_extra = (f", overall length {act.screw_length_mm:g} mm with bearing seats, locknut thread and "
+                       f"drive journal with {drive}")
+        if act.nut_mount.kind == "flange":
+            nut_extra = f", flange with {act.nut_mount.bolt_count} bolt holes"
+    rows: list[_Row] = [
         ("screw", 1, mats.screw, "",
          f"screw, {d.screw.starts}-start {hand}-hand thread, pitch {d.thread.pitch_mm:g} mm, "
-         f"pitch diameter {d.screw.pitch_diameter_mm:g} mm, length {d.screw.length_mm:g} mm", "screw"),
+         f"pitch diameter {d.screw.pitch_diameter_mm:g} mm, threaded length {screw_thread_length(d):g} mm"
+         + screw_extra, "screw"),
         ("roller", d.roller.count, mats.roller, "",
          f"roller, single-start {hand}-hand thread, pitch diameter {d.roller.pitch_diameter_mm:g} mm, "
          f"end gears and journals", "roller_0"),
         ("nut", 1, mats.nut, "",
          f"nut, {d.nut.starts}-start {hand}-hand internal thread, outside diameter {d.nut.outer_diameter_mm:g} mm, "
-         f"ring gears and retaining-ring grooves at both ends", "nut"),
+         f"ring gears and retaining-ring grooves at both ends" + nut_extra, "nut"),
     ]
     lay = layout(design)
     if lay is not None:
         rows.append(("carrier", 2, mats.carrier, "", f"carrier ring with {d.roller.count} journal bores", "carrier_lo"))
         rows.append(("retaining ring", 2, mats.retaining_ring, lay.ring.designation,
                      "internal retaining ring for bores", "retaining_ring_lo"))
+    if act is not None:
+        rows += _actuator_rows(act)
     fields = ("part", "quantity", "material", "designation", "description", "body")
     return [PartItem(item=i, **dict(zip(fields, row))) for i, row in enumerate(rows, start=1)]
 
 
+def _actuator_rows(act: Any) -> list[_Row]:
+    """The purchased parts of an actuator layout: per screw end its bearings (the fixed
+    end's pair as one line of two), the KM locknut, the DIN 471 ring; the flange bolts and
+    the drive key."""
+    rows: list[_Row] = []
+    for end in act.ends:
+        if end.bearings:
+            b = end.bearings[0]
+            kind = ("angular contact ball bearing, a pair back to back" if end.role == "fixed"
+                    else "deep groove ball bearing, free to slide in its housing")
+            rows.append((f"bearing, {end.role} end", len(end.bearings), None, b.designation,
+                         f"{kind}; d x D x B = {b.size.bore_mm:g} x {b.size.outer_diameter_mm:g} x "
+                         f"{b.size.width_mm:g} mm (ISO 15); {PURCHASED}", None))
+    for end in act.ends:
+        if end.locknut is not None:
+            rows.append(("locknut", 1, None, end.locknut.designation,
+                         f"precision locknut (ISO 2982-2), thread {end.locknut.thread} {end.locknut_tolerance} on the "
+                         f"screw, clamps the {end.role} end's bearings; {PURCHASED}", None))
+        if end.ring is not None:
+            rows.append(("shaft ring", 1, None, end.ring.designation,
+                         f"retaining ring for shafts (DIN 471), holds the {end.role} end's bearing; {PURCHASED}", None))
+    m = act.nut_mount
+    if m.kind == "flange" and m.bolt is not None:
+        rule = act.sizes["actuator.nut_mount.bolt_length_mm"].source
+        rows.append(("flange bolt", m.bolt_count, None, f"ISO 4762 {m.bolt.name} x {m.bolt_length_mm:g} - 8.8",
+                     f"socket head cap screw, nut flange to housing; length: {rule}; {PURCHASED}", None))
+    key = act.sizes.get("actuator.drive.key")
+    if key is not None:
+        rows.append(("drive key", 1, None, str(key.value),
+                     f"parallel key (DIN 6885-1 form A) in the drive journal's keyway; {PURCHASED}", None))
+    return rows
+
+
 def parts_list(design: Any, volumes: Mapping[str, float]) -> list[PartsListRow]:
     """The rows of the parts list of ``design``; ``volumes``: the volume (mm^3) of one piece
-    of every rigid body, by body name (:func:`prs_geom.mesh.volumes.part_volumes`)."""
-    return [PartsListRow(item=it.item, part=it.part, quantity=it.quantity, material=it.material.name,
-                         density_kg_m3=it.material.density_kg_m3, volume_mm3=volumes[it.body],
+    of every rigid body, by body name (:func:`prs_geom.mesh.volumes.part_volumes`). A
+    purchased part's material reads :data:`PURCHASED`, its density and volume None."""
+    return [PartsListRow(item=it.item, part=it.part, quantity=it.quantity,
+                         material=PURCHASED if it.purchased else it.material.name,
+                         density_kg_m3=None if it.purchased else it.material.density_kg_m3,
+                         volume_mm3=None if it.purchased else volumes[it.body],
                          designation=it.designation, description=it.description) for it in part_items(design)]
 
 
 def _cell(v: Any) -> str:
     """A CSV field: text neutralised (:func:`~prs_geom.exports.textsafe.csv_field`), floats
-    in full precision."""
+    in full precision, None (a purchased part's mass) empty."""
+    if v is None:
+        return ""
     if isinstance(v, str):
         return csv_field(v)
     return repr(v) if isinstance(v, float) else str(v)
+
+
+def total_mass_kg(rows: list[PartsListRow]) -> float:
+    """Mass (kg) of the parts with one (the purchased parts' masses are the suppliers')."""
+    return sum(m for m in (r.total_mass_kg for r in rows) if m is not None)
 
 
 def parts_list_csv(rows: list[PartsListRow], design_name: str) -> str:
@@ -166,7 +249,7 @@ def write_parts_list_xlsx(rows: list[PartsListRow], path: Path, design_name: str
                 ws.cell(row=ws.max_row, column=c).number_format = "0.0000"
             elif k == "volume_mm3":
                 ws.cell(row=ws.max_row, column=c).number_format = "0.0"
-    xlsx_append(ws, ["", "total", sum(r.quantity for r in rows), "", "", "", "", sum(r.total_mass_kg for r in rows)])
+    xlsx_append(ws, ["", "total", sum(r.quantity for r in rows), "", "", "", "", total_mass_kg(rows)])
     ws.cell(row=ws.max_row, column=8).number_format = "0.0000"
     ws.freeze_panes = "A4"                   # title, column titles and keys stay
     for c, w in zip("ABCDEFGHIJ", (6, 16, 9, 18, 10, 14, 12, 12, 22, 70)):

@@ -55,7 +55,7 @@ __all__ = ["DISPLAY_TOLERANCE_MM", "COLOURS", "scene_payload", "three_js", "Q", 
 DISPLAY_TOLERANCE_MM = 0.1
 
 COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "gear": "#9a9aa4", "carrier": "#b4b4c0",
-           "retaining": "#2e2e33"}
+           "retaining": "#2e2e33", "bearing": "#b8bcc6", "locknut": "#3a3a40", "shaft": "#2e2e33"}
 
 
 def _b64(a: np.ndarray) -> str:
@@ -74,7 +74,8 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM, screw_pr
                            "f": _b64(np.asarray(mesh.faces, dtype=np.uint32))})
         colour = COLOURS["gear"] if kind == "gear" else COLOURS[name.split("_")[0]]
         instances.append({"name": name, "mesh": index[id(mesh)], "T": [float(x) for x in T.ravel()],
-                          "colour": colour, "cut": name.startswith(("nut", "carrier", "retaining"))})
+                          "colour": colour, "cut": name.startswith(("nut", "carrier", "retaining", "bearing", "locknut",
+                                                                  "shaft_ring"))})
     tri = sum(len(asm.placed[i["name"]][0].faces) for i in instances)
     out = {"meshes": meshes, "instances": instances, "tolerance_mm": tol, "triangles": int(tri)}
     motion = _motions(asm)
@@ -404,7 +405,9 @@ def _rating_html(r: dict[str, Any], plots_svg: dict[str, str]) -> str:
          Q(lim["critical_speed_rpm"], kl + "critical_speed_rpm")],
         ["speed limit d n (rpm)", Q(lim["dn_speed_limit_rpm"], kl + "dn_speed_limit_rpm")],
         ["permissible speed (rpm)", Q(lim["permissible_speed_rpm"], kl + "permissible_speed_rpm")],
-        [f"Euler buckling load ({lim['buckling_ends']}) (N)", Q(lim["buckling_load_n"], kl + "buckling_load_n")],
+        [Raw(f"Euler buckling load ({prose(lim['buckling_ends'])}, "
+             f"{num(lim['buckling_length_mm'], kl + 'buckling_length_mm')}) (N)"),
+         Q(lim["buckling_load_n"], kl + "buckling_load_n")],
         [Raw(f"permissible buckling load (safety {num(lim['buckling_safety'], kl + 'buckling_safety')}) (N)"),
          Q(lim["permissible_buckling_load_n"], kl + "permissible_buckling_load_n")],
         [Raw(f"efficiency forward (mu {num(eff['friction_coefficient'], ke + 'friction_coefficient')})"),
@@ -658,10 +661,14 @@ def _parts_list_html(parts_list: list[dict[str, Any]]) -> str:
     """The parts list (report.json ``parts_list`` rows) with the total mass."""
     from prs_geom.exports.bom import COLUMNS as BOM_COLUMNS
 
+    masses = [r["total_mass_kg"] for r in parts_list]
+    total = sum(m for m in masses if m is not None)
+    # a purchased part has no mass here (its supplier's catalogue has it)
+    whose = " of the made parts" if any(m is None for m in masses) else ""
     return ("<h2 id='parts-list'>Parts list</h2>" + table(
         [[r[k] for k, _, _ in BOM_COLUMNS] for r in parts_list],
         [_header(t, u) for _, t, u in BOM_COLUMNS], [f"parts_list.{k}" for k, _, _ in BOM_COLUMNS])
-        + f"<p class='note'>total mass {num(sum(r['total_mass_kg'] for r in parts_list), 'total_mass_kg')}; "
+        + f"<p class='note'>total mass{whose} {num(total, 'total_mass_kg')}; "
         "item numbers are the balloons of the assembly drawing; volumes from the meshes.</p>")
 
 

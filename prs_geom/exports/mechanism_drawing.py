@@ -37,7 +37,7 @@ from prs_geom.model.design import PRSDesign
 from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
-__all__ = ["MECHANISM_DRAWINGS", "BALLOON_D", "SCALES", "VIEW", "carrier_drawing", "nut_end_drawing",
+__all__ = ["NOTE_SMALL_H", "MECHANISM_DRAWINGS", "BALLOON_D", "SCALES", "VIEW", "carrier_drawing", "nut_end_drawing",
            "assembly_drawing", "mechanism_drawings", "write_all_drawings"]
 
 #: Mechanism drawings in sheet order: (key, file name).
@@ -76,8 +76,12 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
     psp.add_text(f"{label}  {_scale_text(scale)}", height=TITLE_H,
                  dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
     lines = [w for n in notes for w in dxf_wrap(n, NOTES[2], subsequent_indent="  ")]
+    # 5 mm a line; when the lines would run past y = 13 mm (the frame is at 10 mm), closer and
+    # in the smaller ISO 3098 height 2.5 mm, whose text box still fits the closer step
+    step = min(5.0, 57.0 / max(len(lines) - 1, 1))
+    height = TEXT_H if step >= 5.0 else NOTE_SMALL_H
     for i, n in enumerate(lines):
-        psp.add_text(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((25.0, 70.0 - 5.0 * i))
+        psp.add_text(n, height=height, dxfattribs={"layer": "TEXT"}).set_placement((25.0, 70.0 - step * i))
     _title_block(psp, rows, title)
     ext = bbox.extents(msp)
     msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
@@ -90,6 +94,9 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
     _stamp(doc, design, name, date)
 
 
+#: Text height (paper mm) of the notes when they are too many for 5 mm lines: the smaller
+#: ISO 3098 height, so that a long parts list (an actuator's) keeps its lines apart.
+NOTE_SMALL_H = 2.5
 #: The one viewport of a mechanism sheet (paper mm): above the notes and the title block.
 VIEW = (25.0, 85.0, 405.0, 275.0)
 
@@ -232,6 +239,7 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
     """Axial half-section outlines of every part (screw frame, upper half) with one balloon
     per parts-list item (``parts``: :class:`~prs_geom.exports.bom.PartItem`) and the
     parts list on the sheet."""
+    from prs_geom.geometry.actuator import actuator_layout
     from prs_geom.geometry.frames import screw_z_range
 
     doc = _new_doc()
@@ -242,7 +250,10 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
     zs0, zs1 = screw_z_range(design)
     R = lay.nut_outer_radius_mm
     a = lay.centre_distance_mm
-    s = _fit_scale(max(hi, zs1) - min(lo, zs0) + 60.0, R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
+    act = actuator_layout(design)
+    # the view's extent: the screw's end faces and the largest part radius of an actuator
+    v0, v1, top_r = _actuator_extent(act, min(lo, zs0), max(hi, zs1), R)
+    s = _fit_scale(v1 - v0 + 60.0, top_r + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
     k = 1.0 / s
     out = {"layer": "OUTLINE"}
 
@@ -276,17 +287,19 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
     targets["carrier"] = (0.5 * (c[0] + c[1]), 0.5 * (lay.carrier_inner_radius_mm + a - rj))
     rz = lay.ends[0].ring
     targets["retaining ring"] = (0.5 * (rz[0] + rz[1]), 0.5 * (lay.ring_inner_radius_mm + lay.ring_outer_radius_mm))
-    msp.add_line((min(lo, zs0) - 6 * k, 0.0), (max(hi, zs1) + 6 * k, 0.0),
+    if act is not None:
+        targets.update(_actuator_outlines(rect, act, lay))
+    msp.add_line((v0 - 6 * k, 0.0), (v1 + 6 * k, 0.0),
                  dxfattribs={"layer": "CENTER", "ltscale": 4.0 * k})
     ov = _dim_override(s)
     msp.add_linear_dim(base=(lo, -8 * k), p1=(lo, 0.0), p2=(hi, 0.0), text="<> nut overall", override=ov,
                        dxfattribs={"layer": "DIMENSIONS"}).render()
     # balloons above the parts, left to right in item order, each with a leader to its part
-    top = R + 18.0 * k
-    span = max(hi, zs1) - min(lo, zs0)
+    top = top_r + 18.0 * k
+    span = v1 - v0
     for i, row in enumerate(parts):
         tx, ty = targets[row.part]
-        bx = min(lo, zs0) + span * (i + 0.5) / len(parts)
+        bx = v0 + span * (i + 0.5) / len(parts)
         r_b = 0.5 * BALLOON_D * k
         msp.add_circle((bx, top), r_b, dxfattribs={"layer": "BALLOONS"})
         msp.add_text(str(row.item), height=TEXT_H * k, dxfattribs={"layer": "BALLOONS"}).set_placement(
@@ -295,14 +308,67 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
         d = math.hypot(dx, dy)
         msp.add_line((bx + r_b * dx / d, top + r_b * dy / d), (tx, ty), dxfattribs={"layer": "BALLOONS"})
         msp.add_circle((tx, ty), 0.6 * k, dxfattribs={"layer": "BALLOONS"})     # the leader's dot
-    notes = ["Parts list (item, part, quantity, material, designation):"] + [
-        f"  {r.item}  {r.part}  x{r.quantity}  {dxf_text(r.material.name)}"
-        + (f"  {r.designation}" if r.designation else "")
-        for r in parts] + ["Outlines: thread envelopes at the crest diameters; roller 0 in the section plane"]
+    notes = _parts_notes(parts, act is not None)
     _sheet(doc, "A3_ASSEMBLY", design, f"PRS ASSEMBLY - {dxf_text(design.name)}",
            _rows(design, "assembly", design.materials.nut, s, date, version, 6), notes,
-           (0.5 * (min(lo, zs0) + max(hi, zs1)), 0.5 * R + 8 * k), s, "ASSEMBLY (axial half-section)", date)
+           (0.5 * (v0 + v1), 0.5 * top_r + 8 * k), s, "ASSEMBLY (axial half-section)", date)
     return doc
+
+
+def _parts_notes(parts: list[Any], actuator: bool) -> list[str]:
+    """The assembly sheet's notes: the parts list (a purchased item's material reads
+    "purchased") and what the outlines show."""
+    rows = [f"  {r.item}  {r.part}  x{r.quantity}  {'purchased' if r.material is None else dxf_text(r.material.name)}"
+            + (f"  {r.designation}" if r.designation else "") for r in parts]
+    shown = "Outlines: thread envelopes at the crest diameters; roller 0 in the section plane"
+    if actuator:
+        shown += "; purchased parts as envelopes, a flange bolt turned into the section plane"
+    return ["Parts list (item, part, quantity, material, designation):", *rows, shown]
+
+
+def _actuator_extent(act: Any, z0: float, z1: float, r: float) -> tuple[float, float, float]:
+    """The assembly view's axial extent and top radius (mm) widened to an actuator's parts."""
+    if act is None:
+        return z0, z1, r
+    radii = [0.5 * b.size.outer_diameter_mm for e in act.ends for b in e.bearings]
+    radii += [0.5 * act.nut_mount.flange_diameter_mm]
+    return min(z0, act.screw_z[0]), max(z1, act.screw_z[1]), max([r, *radii])
+
+
+def _actuator_outlines(rect: Any, act: Any, lay: MechanismLayout) -> dict[str, tuple[float, float]]:
+    """Outlines (``rect(z0, z1, r0, r1)``) of an actuator's parts in the upper half-section:
+    the screw ends' steps, the bearings, the locknut, the shaft ring, the flange with one bolt
+    turned into the section plane, the drive key; returns the balloon target of each
+    purchased item, keyed by its parts-list name (:func:`prs_geom.exports.bom.part_items`)."""
+    targets: dict[str, tuple[float, float]] = {}
+    for end in act.ends:
+        for st in end.steps:
+            rect(st.z[0], st.z[1], 0.0, 0.5 * st.diameter_mm)
+        for b in end.bearings:
+            rect(b.z[0], b.z[1], 0.5 * b.size.bore_mm, 0.5 * b.size.outer_diameter_mm)
+            targets[f"bearing, {end.role} end"] = (b.middle_z, 0.25 * (b.size.bore_mm + b.size.outer_diameter_mm))
+        if end.locknut is not None and end.locknut_z is not None:
+            ln = end.locknut
+            rect(*end.locknut_z, 0.5 * ln.thread_diameter_mm, 0.5 * ln.outer_diameter_mm)
+            targets["locknut"] = (0.5 * sum(end.locknut_z), 0.25 * (ln.thread_diameter_mm + ln.outer_diameter_mm))
+        if end.ring is not None and end.ring_z is not None:
+            rect(*end.ring_z, 0.5 * end.ring.groove_diameter_mm, 0.5 * end.ring.shaft_mm + 1.5)
+            targets["shaft ring"] = (0.5 * sum(end.ring_z), 0.5 * end.ring.shaft_mm + 0.75)
+        if end.key is not None and end.key_z is not None:
+            r_j = 0.5 * end.steps[-1].diameter_mm
+            floor = r_j - end.key.shaft_depth_mm
+            rect(*end.key_z, floor, floor + end.key.height_mm)
+            targets["drive key"] = (0.5 * sum(end.key_z), floor + 0.5 * end.key.height_mm)
+    m = act.nut_mount
+    if m.kind == "flange" and m.bolt is not None:
+        rect(*m.z, lay.nut_outer_radius_mm, 0.5 * m.flange_diameter_mm)
+        length = m.bolt_length_mm
+        r_bc, d = 0.5 * m.bolt_circle_diameter_mm, m.bolt.diameter_mm
+        # the head on the flange's nut side, the shank through the flange into the housing
+        rect(m.z[1], m.z[1] + d, r_bc - 0.5 * m.bolt.head_diameter_mm, r_bc + 0.5 * m.bolt.head_diameter_mm)
+        rect(m.z[1] - length, m.z[1], r_bc - 0.5 * d, r_bc + 0.5 * d)
+        targets["flange bolt"] = (m.z[1] + 0.5 * d, r_bc)
+    return targets
 
 
 def _middle():

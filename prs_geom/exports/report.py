@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ANGLE_CONVENTIONS", "GEAR_PHASING_RULE", "GEAR_RUNNING_CLEARANCE", "MODEL_RISK_NOT_COMPUTED",
            "REPORT_FORMAT_VERSION", "contact_section", "gears_section", "gear_failures", "load_details_dict",
            "constant_pitch_section", "loads_section", "model_risk_section", "inspection_section",
-           "mechanism_section", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
+           "mechanism_section", "actuator_section", "actuator_warnings", "ActuatorStage", "assembly_section", "gear_warnings", "fe_cache_warnings", "rating_warnings",
            "roller_loads_dict", "TOLERANCE_DEFINITIONS", "tolerances_dict", "tolerance_section", "synthesis_section", "robust_section",
            "RATING_METHOD", "LIMIT_MESSAGES", "limit_warnings", "limit_check_dict", "rating_section",
            "step_section", "step_files", "step_warnings", "mechanism_warnings", "check_warnings", "PitchLists",
@@ -161,7 +161,7 @@ def fe_cache_warnings(cache: Any) -> list[str]:
 def rating_warnings(rating: "RatingResult") -> list[str]:
     """The build's warnings when the speed or the largest load exceeds its permissible limit."""
     lim = rating.limits
-    out = []
+    out = [f"supports: {w}" for w in lim.supports.warnings]
     if not lim.speed_ok:
         out.append(f"rating: speed {lim.max_speed_rpm:.6g} rpm exceeds the permissible speed "
                    f"{lim.permissible_speed_rpm:.6g} rpm (report rating.limits)")
@@ -199,6 +199,79 @@ def mechanism_warnings(m: "MechanismCheck") -> list[str]:
     """The build's warning naming the failed mechanism checks."""
     failed = [name for name, ok in m.checks if not ok]
     return ["mechanism: " + "; ".join(failed) + " failed (report mechanism)"] if failed else []
+
+
+def actuator_warnings(stage: "ActuatorStage") -> list[str]:
+    """One warning per failed stroke-end check, naming the stroke end and the clearance."""
+    out = []
+    for c in stage.checks:
+        if c.passed:
+            continue
+        if c.stroke_end == "both":
+            out.append(f"actuator: {c.what}: margin {c.clearance_mm:.6g} N (must be > 0: give more or larger "
+                       f"actuator.nut_mount bolts; report actuator.stroke_end_checks)")
+        else:
+            out.append(f"actuator: at the {'lower' if c.stroke_end == 'lo' else 'upper'} stroke end, {c.what}: "
+                       f"{c.kind} clearance {c.clearance_mm:.4g} mm (must be > 0; report actuator.stroke_end_checks)")
+    return out
+
+
+def _span(z: "tuple[float, float] | None") -> list[float] | None:
+    return None if z is None else [z[0], z[1]]
+
+
+def _screw_end_dict(side: str, e: "ScrewEnd") -> dict[str, Any]:
+    """One screw end of the ``actuator`` section (mm, screw frame)."""
+    key = None if e.key is None else {"width_mm": e.key.width_mm, "height_mm": e.key.height_mm,
+                                      "shaft_depth_mm": e.key.shaft_depth_mm, "z_mm": _span(e.key_z)}
+    return {
+        "side": side, "role": e.role, "run_out_mm": _span(e.run_out), "tip_z_mm": e.tip_z,
+        "support_z_mm": e.support_z,
+        "steps": [{"name": st.name, "z_mm": _span(st.z), "diameter_mm": st.diameter_mm} for st in e.steps],
+        "bearings": [{"designation": b.designation, "bore_mm": b.size.bore_mm,
+                      "outer_diameter_mm": b.size.outer_diameter_mm, "width_mm": b.size.width_mm,
+                      "z_mm": _span(b.z)} for b in e.bearings],
+        "seat_tolerance": e.seat_tolerance,
+        "locknut": None if e.locknut is None else {
+            "designation": e.locknut.designation, "thread": e.locknut.thread,
+            "tolerance_class": e.locknut_tolerance, "outer_diameter_mm": e.locknut.outer_diameter_mm,
+            "width_mm": e.locknut.width_mm, "z_mm": _span(e.locknut_z)},
+        "shaft_ring": None if e.ring is None else {
+            "designation": e.ring.designation, "groove_diameter_mm": e.ring.groove_diameter_mm,
+            "groove_width_mm": e.ring.groove_width_mm, "z_mm": _span(e.ring_z)},
+        "drive_key": key,
+        "drive_flat": None if e.flat_depth_mm is None else {"depth_mm": e.flat_depth_mm, "z_mm": _span(e.key_z)},
+        "drive_fit": e.drive_fit,
+    }
+
+
+def actuator_section(stage: "ActuatorStage") -> dict[str, Any]:
+    """The ``actuator`` section: stroke, screw ends, nut mounting, supports, every size with
+    its source, and the stroke-end checks (mm, screw frame, nut at mid-stroke)."""
+    lay = stage.layout
+    m, sup = lay.nut_mount, lay.supports
+    mount: dict[str, Any] = {"kind": m.kind, "z_mm": _span(m.z)}
+    if m.bolt is not None:
+        mount.update(bolt=m.bolt.name, bolt_count=m.bolt_count, clearance_hole_mm=m.bolt.clearance_hole_mm,
+                     bolt_circle_diameter_mm=m.bolt_circle_diameter_mm, flange_diameter_mm=m.flange_diameter_mm,
+                     bolt_length_mm=m.bolt_length_mm)
+    checks = [{"stroke_end": c.stroke_end, "what": c.what, "kind": c.kind, "clearance_mm": c.clearance_mm,
+               "passed": c.passed} for c in stage.checks]
+    return {
+        "stroke_mm": lay.stroke_mm, "over_travel_mm": lay.over_travel_mm, "nut_shifts_mm": list(lay.shifts),
+        "screw_length_mm": lay.screw_length_mm, "threaded_length_mm": lay.threaded_length_mm,
+        "screw_z_mm": list(lay.screw_z), "thread_z_mm": list(lay.thread_z), "full_thread_z_mm": list(lay.full_thread_z),
+        "nut_assembly_z_mm": list(lay.nut_assembly_z), "screw_run_out_mm": lay.screw_run_out_mm,
+        "thread_chamfer_mm": lay.thread_chamfer_mm, "fixed_end": "lo" if lay.fixed_side < 0 else "hi",
+        "ends": [_screw_end_dict(side, e) for side, e in zip(("lo", "hi"), lay.ends)],
+        "nut_mount": mount,
+        "supports": {"critical_speed_length_mm": sup.critical_speed_length_mm,
+                     "critical_speed_ends": sup.critical_speed_ends, "buckling_length_mm": sup.buckling_length_mm,
+                     "buckling_ends": sup.buckling_ends, "worst_stroke_end": sup.worst_stroke_end, "rule": sup.rule},
+        "sizes": [{"key": k, "value": v.value, "source": v.source} for k, v in lay.sizes.items()],
+        "stroke_end_checks": checks,
+        "passed": all(c["passed"] for c in checks),
+    }
 
 
 # --------------------------------------------------------------------------- rating
@@ -254,13 +327,15 @@ def _variant_life(v: "VariantLife") -> dict[str, Any]:
 
 def _rating_limits(r: "RatingResult") -> dict[str, Any]:
     lim, sup = r.limits, r.supports
-    return {"unsupported_length_mm": lim.free_length_mm, "root_diameter_mm": lim.root_diameter_mm,
-            "critical_speed_ends": sup.critical_speed_ends, "critical_speed_rpm": lim.critical_speed_rpm,
+    res = lim.supports
+    return {"unsupported_length_mm": res.critical_speed_length_mm, "root_diameter_mm": lim.root_diameter_mm,
+            "buckling_length_mm": res.buckling_length_mm, "supports_source": res.source, "supports_rule": res.rule,
+            "critical_speed_ends": res.critical_speed_ends, "critical_speed_rpm": lim.critical_speed_rpm,
             "critical_speed_factor": sup.critical_speed_factor,
             "permissible_critical_speed_rpm": lim.permissible_critical_speed_rpm,
             "dn_limit_mm_rpm": lim.dn_limit_mm_rpm, "dn_speed_limit_rpm": lim.dn_speed_limit_rpm,
             "permissible_speed_rpm": lim.permissible_speed_rpm, "max_speed_rpm": lim.max_speed_rpm,
-            "speed_ok": lim.speed_ok, "buckling_ends": sup.buckling_ends, "buckling_load_n": lim.buckling_load_n,
+            "speed_ok": lim.speed_ok, "buckling_ends": res.buckling_ends, "buckling_load_n": lim.buckling_load_n,
             "buckling_safety": sup.buckling_safety, "permissible_buckling_load_n": lim.permissible_buckling_load_n,
             "buckling_ok": bool(r.max_load_n <= lim.permissible_buckling_load_n),
             "required_static_safety": r.settings.required_static_safety,
@@ -568,6 +643,15 @@ REPORT_FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True)
+class ActuatorStage:
+    """The actuator of a build: its layout and the stroke-end checks
+    (:func:`prs_geom.geometry.actuator.stroke_end_checks`)."""
+
+    layout: "ActuatorLayout"
+    checks: "tuple[StrokeEndCheck, ...]"
+
+
+@dataclass(frozen=True)
 class PitchLists:
     """The pitch lists of the three parts (mm, tooth 1 at the loaded end)."""
 
@@ -620,6 +704,7 @@ class BuildResults:
     #: (part, what the STEP writer returned) per STEP file of a ``--step`` build (:func:`step_section`)
     step: tuple[tuple[str, dict[str, Any]], ...] | None = None
     mechanism: "MechanismCheck | None" = None
+    actuator: "ActuatorStage | None" = None
     kinematics: "Kinematics | None" = None
     parts_list: list["PartsListRow"] | None = None
     checks: ChecksResult | None = None
@@ -719,6 +804,8 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
         out["step"] = step_section(results.step)
     if results.mechanism is not None:
         out["mechanism"] = mechanism_section(results.mechanism)
+    if results.actuator is not None:
+        out["actuator"] = actuator_section(results.actuator)
     if results.kinematics is not None:
         out["kinematics"] = results.kinematics.as_dict()
     if results.parts_list is not None:

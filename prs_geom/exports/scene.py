@@ -144,6 +144,9 @@ MATERIALS = {
     "gear": Material("gear steel", (0.35, 0.35, 0.38, 1.0)),
     "carrier": Material("carrier steel", (0.55, 0.55, 0.60, 1.0)),
     "retaining_ring": Material("retaining ring spring steel", (0.08, 0.08, 0.09, 1.0)),
+    "bearing": Material("bearing steel", (0.70, 0.71, 0.74, 1.0)),
+    "locknut": Material("locknut steel", (0.20, 0.20, 0.22, 1.0)),
+    "shaft_ring": Material("shaft ring spring steel", (0.08, 0.08, 0.09, 1.0)),
 }
 
 
@@ -189,8 +192,10 @@ def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _family(name: str) -> str:
     """The material key of a placed part (its family: screw, roller, gear, ...)."""
-    return ("gear" if "gear" in name else "retaining_ring" if name.startswith("retaining_ring")
-            else name.split("_")[0])
+    for family in ("retaining_ring", "shaft_ring"):
+        if name.startswith(family):
+            return family
+    return "gear" if "gear" in name else name.split("_")[0]
 
 
 def _scene_meshes(asm: Any) -> tuple[dict[str, SceneMesh], dict[int, str]]:
@@ -217,9 +222,10 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
     nodes follow the running mechanism, and the scene carries the animation
     ``screw revolution`` (:func:`mechanism_animation`):
 
-    * ``screw``: turns about the axis;
-    * ``nut_assembly`` (no mesh): travels along the axis; children: the nut, its ring gears
-      and ends, the retaining rings;
+    * ``screw``: turns about the axis; children: an actuator's screw ends, bearings,
+      locknut and shaft ring (:func:`moving_group`);
+    * ``nut_assembly`` (no mesh): travels along the axis; children: the nut, its ring gears,
+      ends and (an actuator's) flange, the retaining rings;
     * ``carrier`` (no mesh): travels with the nut and turns at the carrier speed; children:
       the carriers and the rollers ``roller_<k>``, each spinning about its own axis, with
       its gears and journals as children.
@@ -249,11 +255,11 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
         mesh, T, _ = asm.placed[name]
         return SceneNode(name, by_id[id(mesh)], np.linalg.solve(parent_T, np.asarray(T, dtype=np.float64)))
 
-    nut_children, carrier_children, top = [], [], []
+    nut_children, carrier_children, screw_names = [], [], []
     for body, names in groups.items():
         group = moving_group(body)
         if group == "screw":
-            top.extend(leaf(n, I) for n in names)
+            screw_names.extend(n for n in names if n != "screw")
         elif group == "nut":
             nut_children.extend(leaf(n, I) for n in names)
         elif group == "carrier":
@@ -263,15 +269,25 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
             T = np.asarray(T, dtype=np.float64)
             carrier_children.append(SceneNode(body, by_id[id(mesh)], T,
                                               tuple(leaf(n, T) for n in names if n != body)))
-    nodes = (*top, SceneNode("nut_assembly", None, I, tuple(nut_children)),
+    # the screw's node turns; what turns with it (an actuator's screw ends, bearings, locknut
+    # and shaft ring) hangs below it
+    mesh, T, _ = asm.placed["screw"]
+    T = np.asarray(T, dtype=np.float64)
+    nodes = (SceneNode("screw", by_id[id(mesh)], T, tuple(leaf(n, T) for n in screw_names)),
+             SceneNode("nut_assembly", None, I, tuple(nut_children)),
              SceneNode("carrier", None, I, tuple(carrier_children)))
     return Scene(meshes, mats, nodes, title, (mechanism_animation(asm.design),))
 
 
 def moving_group(body: str) -> str:
     """What a rigid body (:meth:`~prs_geom.mesh.assembly.Assembly.rigid_body`) moves with in
-    the running mechanism: "screw", "nut" (the nut and the retaining rings in its grooves),
-    "carrier" (both carriers) or, for a roller, the roller itself."""
+    the running mechanism: "screw" (the screw, and an actuator's bearings, locknut and shaft
+    ring: the locknut and the ring turn with it, and a bearing's envelope is a body of
+    revolution, so turning it with the screw shows what standing still would), "nut" (the
+    nut and the retaining rings in its grooves), "carrier" (both carriers) or, for a roller,
+    the roller itself."""
+    if body.startswith(("bearing_", "locknut", "shaft_ring")):
+        return "screw"
     if body == "nut" or body.startswith("retaining_ring"):
         return "nut"
     return "carrier" if body.startswith("carrier") else body

@@ -7,7 +7,7 @@ Part frames (z along the part axis, mm):
   side of roller tooth j: the nut tooth that carries roller tooth j when the load flows
   toward -z (screw pulled at the loaded end; see docs/theory/loads.md).
 * roller: thread from 0 to n p; tooth j mid-plane at z = (j - 1/2) p at local theta = 0.
-* screw: thread of length ``screw.length_mm`` centred on the nut thread; a tooth mid-plane
+* screw: thread (:func:`screw_z_range`) centred on the nut thread at mid-stroke; a tooth mid-plane
   at z = p/2 at theta = 0.
 
 Assembly (screw frame = nut frame): roller k sits at carrier angle psi_k = 2 pi k / z with
@@ -33,7 +33,7 @@ from prs_geom.geometry.helix import PitchWarp, identity_warp
 
 __all__ = [
     "FIRST_MID_PITCHES", "carrier_angles", "part_warps", "roller_spin", "roller_transform", "rotation_z",
-    "screw_z_range", "thread_length", "translation",
+    "screw_thread_length", "screw_z_range", "thread_length", "translation",
 ]
 
 
@@ -97,9 +97,19 @@ def thread_length(design: PRSDesign) -> float:
 
 
 def screw_z_range(design: PRSDesign) -> tuple[float, float]:
-    """(z_lo, z_hi) (mm) of the screw thread in the screw frame, centred on the nut thread."""
-    extra = 0.5 * (design.screw.length_mm - thread_length(design))
-    return -extra, thread_length(design) + extra
+    """(z_lo, z_hi) (mm) of the screw thread (run-outs included) in the screw frame, centred
+    on the nut thread at mid-stroke: ``screw.length_mm`` long, or for an actuator what the
+    nut assembly, the stroke, the over-travels and the run-outs need
+    (:func:`prs_geom.geometry.actuator.screw_thread_span`)."""
+    from prs_geom.geometry.actuator import screw_thread_span
+
+    return screw_thread_span(design)
+
+
+def screw_thread_length(design: PRSDesign) -> float:
+    """Threaded length of the screw (mm), run-outs included (:func:`screw_z_range`)."""
+    lo, hi = screw_z_range(design)
+    return hi - lo
 
 
 def part_warps(design: PRSDesign) -> dict[str, PitchWarp]:

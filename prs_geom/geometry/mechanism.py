@@ -441,7 +441,8 @@ def check_layout(design: PRSDesign) -> MechanismLayout | None:
     """Every rule of a build that needs no meshing, for the parts beyond the threads: the end
     gears' sizing (:func:`~prs_geom.geometry.gear_pair.design_gear_pair`) and, when the design has
     a mechanism, its :func:`layout` with every standard-table look-up (ISO 286 fits and the
-    stack-up zones, the DIN 472 ring). ``prs-geom validate`` and ``build`` run it before any
+    stack-up zones, the DIN 472 ring). The actuator's sizes (which depend on this layout) are
+    :func:`~prs_geom.geometry.actuator.actuator_layout`'s, which the same callers run next. ``prs-geom validate`` and ``build`` run it before any
     work, so that a design they accept does not fail later for a rule it could have checked.
 
     Returns the layout (None without a mechanism). Raises

@@ -7,26 +7,33 @@ End gears (:func:`end_gears`, docs/theory/gears.md): a spur gear on each roller 
 face width beyond the thread, cut through the continued thread; an internal ring gear at
 each nut end. They are placed as their own scene parts (``roller_<k>_gear_lo/hi``,
 ``nut_ring_gear_lo/hi``) that move with their roller or nut (:meth:`Assembly.rigid_body`).
+
+Actuator parts (:mod:`prs_geom.mesh.actuator`, a design with ``[actuator]``): the screw ends,
+the nut flange, the bearings, the KM locknut and the DIN 471 ring, meshed in the screw frame
+with the nut at mid-stroke and placed with the identity after the retaining rings. The screw
+ends belong to the screw and the flange to the nut; each purchased part is its own body.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from prs_geom.geometry.actuator import actuator_layout
 from prs_geom.geometry.frames import (FIRST_MID_PITCHES, carrier_angles, part_warps, roller_spin,
                                      roller_transform, screw_z_range, thread_length)
 from prs_geom.model.design import PRSDesign
 from prs_geom.geometry.datum import datum_mark
-from prs_geom.mesh.thread import (ThreadMesh, cut_datum_mark, from_manifold, part_chord_tolerance, thread_mesh,
-                                  to_manifold)
+from prs_geom.mesh.thread import (RunOut, ThreadMesh, apply_run_outs, cut_datum_mark, from_manifold,
+                                  part_chord_tolerance, thread_mesh, to_manifold)
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
 from prs_geom.runtime.progress import ProgressFn, silent
 
 __all__ = [
-    "Assembly", "GEAR_CHORD_MM", "SIDES", "build_assembly", "build_part", "end_gears", "mechanism_parts",
+    "Assembly", "GEAR_CHORD_MM", "SIDES", "build_assembly", "build_part", "design_run_outs", "end_gears", "mechanism_parts",
     "part_z_range", "scene_names", "window_assembly",
 ]
 
@@ -44,10 +51,16 @@ def part_z_range(design: PRSDesign, part: str) -> tuple[float, float]:
 def build_part(design: PRSDesign, part: str, tol: float | None = None,
                profiles: ThreadProfiles | None = None,
                screw_profile: ThreadProfile | None = None,
-               z_window: tuple[float, float] | None = None) -> ThreadMesh | None:
+               z_window: tuple[float, float] | None = None,
+               run_outs: Sequence[RunOut] | None = None) -> ThreadMesh | None:
     """Mesh of one part in its own frame, with its angular datum mark cut into face A
     (the end face at the part's lower z, :mod:`prs_geom.geometry.datum`), at ``tol`` or
     finer for a small part (:func:`~prs_geom.mesh.thread.part_chord_tolerance`).
+
+    ``run_outs``: thread run-outs at the part's end planes
+    (:func:`~prs_geom.mesh.thread.apply_run_outs`), applied before the datum mark is cut
+    (in the same boolean pass); None (default): the design's (:func:`design_run_outs`),
+    ``()``: none.
 
     ``screw_profile`` replaces the design's screw profile (e.g. with the corrected pitch
     diameter of the contact analysis).
@@ -56,7 +69,8 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
     by end faces on them; None when the part does not reach into the window. The datum mark
     is cut only when the piece starts at the part's own face A. Columns and strands are
     those of the whole part (they depend on the profile and the tolerance, not on the end
-    planes), so away from its end faces the piece is the whole part's surface.
+    planes), so away from its end faces the piece is the whole part's surface. A run-out
+    is applied only at an end of the part that the piece reaches (clipped to the piece).
     """
     tol = tol or design.mesh.chord_tolerance_mm
     prof = profiles or ThreadProfiles.from_design(design)
@@ -75,9 +89,27 @@ def build_part(design: PRSDesign, part: str, tol: float | None = None,
     else:
         tm = thread_mesh(prof.nut, z_lo, z_hi, part_chord_tolerance(prof.nut, tol), first_mid,
                          warps["nut"], body_radius=0.5 * design.nut.outer_diameter_mm)
-    if z_lo != lo:
-        return tm
-    return cut_datum_mark(tm, datum_mark(tm.profile, tm.z_lo, tm.body_radius))
+    mark = datum_mark(tm.profile, tm.z_lo, tm.body_radius) if z_lo == lo else None
+    if run_outs is None:
+        run_outs = design_run_outs(design, part)
+    if run_outs:   # the run-outs, then the mark, in one boolean pass
+        return apply_run_outs(tm, run_outs, part_range=(lo, hi), mark=mark)
+    return tm if mark is None else cut_datum_mark(tm, mark)
+
+
+def design_run_outs(design: PRSDesign, part: str) -> tuple[RunOut, ...]:
+    """The thread run-outs of a part of an actuator (none without one), by the rules of
+    :mod:`prs_geom.geometry.actuator`: a grinding-wheel exit of ``screw_run_out_mm`` at both
+    screw thread ends, a 45 degree chamfer of ``thread_chamfer_mm`` at both roller and nut
+    thread ends."""
+    from prs_geom.geometry.actuator import actuator_layout
+
+    lay = actuator_layout(design)
+    if lay is None:
+        return ()
+    if part == "screw":
+        return (RunOut("lo", "wheel-exit", lay.screw_run_out_mm), RunOut("hi", "wheel-exit", lay.screw_run_out_mm))
+    return (RunOut("lo", "chamfer", lay.thread_chamfer_mm), RunOut("hi", "chamfer", lay.thread_chamfer_mm))
 
 
 #: Gear outlines are never meshed coarser than this (mm).
@@ -184,8 +216,11 @@ class Assembly:
     @staticmethod
     def rigid_body(name: str) -> str:
         """The rigid body a scene part belongs to: gears and journals belong to their roller,
-        ring gears and nut ends to the nut; each carrier and retaining ring is its own."""
+        ring gears, nut ends and the nut flange to the nut, the screw ends to the screw; each
+        carrier, retaining ring, bearing, the locknut and the shaft ring is its own."""
         body = name.split("_gear")[0].split("_journal")[0]
+        if body.startswith("screw_"):
+            return "screw"
         return "nut" if body.startswith("nut_") else body
 
 
@@ -194,7 +229,8 @@ def build_assembly(design: PRSDesign, tol: float | None = None, progress: Progre
                    reuse: Assembly | None = None, mechanism: bool = True) -> Assembly:
     """All part meshes and their placement. Rollers share one mesh (placed z times).
     ``gears``/``mechanism``: include the end gears / the mechanism parts (carriers,
-    journals, retaining rings, nut ends) when the design has them.
+    journals, retaining rings, nut ends and, for an actuator, its parts) when the design
+    has them.
 
     ``reuse``: an assembly of the same design and tolerance whose roller, nut and gear
     meshes are taken as they are (only the screw is meshed again), e.g. to check the same
@@ -224,8 +260,11 @@ def _scene_entries(design: PRSDesign, gears: bool, mechanism: bool) -> list[tupl
     """The scene parts in placement order, each (scene name, mesh table, key in the table,
     roller index whose transform places it or None for the screw frame, kind): screw, nut,
     the ring gears, the nut ends, then each roller followed by its gears and journals, then
-    the carriers and the retaining rings. Tables: "parts" (the thread meshes), "gears"
-    (:func:`end_gears`), "mechanism" (:func:`mechanism_parts`)."""
+    the carriers and the retaining rings, then for an actuator (mechanism included) the screw
+    ends, the nut flange, the bearings, the locknut and the shaft ring
+    (:func:`~prs_geom.mesh.actuator.actuator_part_names`). Tables: "parts" (the thread
+    meshes), "gears" (:func:`end_gears`), "mechanism" (:func:`mechanism_parts`, the actuator
+    parts included)."""
     e = [("screw", "parts", "screw", None, "thread"), ("nut", "parts", "nut", None, "thread")]
     if gears:
         e += [(f"nut_ring_gear_{s}", "gears", f"ring_{s}", None, "gear") for s in SIDES]
@@ -240,6 +279,11 @@ def _scene_entries(design: PRSDesign, gears: bool, mechanism: bool) -> list[tupl
     if mechanism:
         e += [(f"{part}_{s}", "mechanism", f"{part}_{s}", None, "mechanism")
               for part in ("carrier", "retaining_ring") for s in SIDES]
+        lay = actuator_layout(design)
+        if lay is not None:
+            from prs_geom.mesh.actuator import actuator_part_names
+
+            e += [(name, "mechanism", name, None, "actuator") for name in actuator_part_names(lay)]
     return e
 
 
@@ -250,7 +294,9 @@ def scene_names(design: PRSDesign, gears: bool, mechanism: bool = False) -> list
 
 def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh] | None:
     """Meshes of the carriers, journals, retaining rings and nut ends
-    (:func:`prs_geom.mesh.mechanism.mechanism_meshes`), None when the design has none."""
+    (:func:`prs_geom.mesh.mechanism.mechanism_meshes`) and, for an actuator, of its parts
+    (:func:`prs_geom.mesh.actuator.actuator_meshes`, screw frame at mid-stroke); None when the
+    design has no mechanism."""
     from prs_geom.geometry.mechanism import layout
 
     lay = layout(design)
@@ -258,7 +304,13 @@ def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh]
         return None
     from prs_geom.mesh.mechanism import mechanism_meshes
 
-    return mechanism_meshes(design, lay, tol)
+    out = mechanism_meshes(design, lay, tol)
+    act = actuator_layout(design)
+    if act is not None:
+        from prs_geom.mesh.actuator import actuator_meshes
+
+        out.update(actuator_meshes(design, act, tol))
+    return out
 
 
 def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progress: ProgressFn = silent,

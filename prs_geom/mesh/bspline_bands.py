@@ -136,10 +136,12 @@ def thread_solid_reference(design: "PRSDesign", part: str, tol: float,
     from prs_geom.mesh.thread import analytic_thread_volume
 
     prof = ThreadProfiles.from_design(design)
-    coarse = build_part(design, part, tol, prof, screw_profile)
+    # the B-rep is the thread body (its B-spline bands follow the thread surface); an
+    # actuator's run-outs are the meshes' until the complete solids carry them too
+    coarse = build_part(design, part, tol, prof, screw_profile, run_outs=())
     coarse_mesh = coarse.to_trimesh()
     ref_tol = min(tol, MESH_REFERENCE_SHARE * float(coarse_mesh.volume) / float(coarse_mesh.area))
-    fine = coarse if ref_tol >= tol else build_part(design, part, ref_tol, prof, screw_profile)
+    fine = coarse if ref_tol >= tol else build_part(design, part, ref_tol, prof, screw_profile, run_outs=())
     fine_mesh = fine.to_trimesh()
     mesh_volume = float(fine_mesh.volume)
     target = min(DEVIATION_SHARE * tol, DEVIATION_VOLUME_SHARE * mesh_volume / float(fine_mesh.area))

@@ -28,7 +28,9 @@ from prs_geom.model.errors import DesignError, ResourceLimitError, format_bytes,
 __all__ = [
     "BASE_BYTES", "BYTES_PER_CHECK_TRIANGLE", "BYTES_PER_EXPORT_TRIANGLE", "BYTES_PER_PLACED_TRIANGLE",
     "CHECK_TOLERANCE_MM", "CHECK_WINDOW_TEETH", "DATUM_SLOT_TRIANGLES", "DEFAULT_BUDGET_FRACTION", "Estimate",
-    "MEMORY_BUDGET_ENV", "WORK_MARGIN", "available_memory_bytes", "check_windows",
+    "COARSE_TOLERANCE_MM", "COARSE_WORK_MARGIN", "FINE_TOLERANCE_MM", "MEMORY_BUDGET_ENV", "RUN_OUT_TRIANGLES", "WORKER_BASE_BYTES",
+    "WORK_MARGIN", "work_margin", "available_memory_bytes", "check_span",
+    "check_windows",
     "default_budget_bytes", "estimate", "guard", "parse_size", "part_triangles",
 ]
 
@@ -40,15 +42,24 @@ DEFAULT_BUDGET_FRACTION = 0.6
 BYTES_PER_CHECK_TRIANGLE = 1200
 BYTES_PER_EXPORT_TRIANGLE = 400
 BYTES_PER_PLACED_TRIANGLE = 120
-#: Interpreter, libraries and the analysis stages (bytes), per process; with the resource
-#: trackers the pool starts. Calibrated by benchmarks/bench_memory.py.
+#: Interpreter, libraries and the analysis stages of the main process (bytes), with the
+#: resource trackers the pool starts. Calibrated by benchmarks/bench_memory.py.
 BASE_BYTES = 320 * 2 ** 20
-#: Safety factor on the mesh work of the estimate: the peaks measured over the calibration
-#: grid of benchmarks/bench_memory.py (teeth 4-20, chord tolerance 1e-4 to 1e-2 mm, 0 and 2
-#: workers) reached up to 1.36 x the per-triangle figures above (fine tolerances, where the
-#: allocator keeps freed blocks); 1.5 keeps the runtime guard (prs_geom.runtime.memwatch) from
-#: stopping a build the estimate accepted.
+#: The same for each worker process (bytes): it imports the meshing and checking libraries
+#: but runs no analysis stage. Calibrated by benchmarks/bench_memory.py.
+WORKER_BASE_BYTES = 220 * 2 ** 20
+#: Factor on the mesh work of the estimate at fine chord tolerances (at and below
+#: :data:`FINE_TOLERANCE_MM`): the peaks measured there reached up to 1.36 x the
+#: per-triangle figures above (the allocator keeps freed blocks); 1.5 keeps the runtime guard
+#: (prs_geom.runtime.memwatch) from stopping a build the estimate accepted.
 WORK_MARGIN = 1.5
+#: At and above :data:`COARSE_TOLERANCE_MM` (the default tolerance) the per-triangle figures
+#: hold with :data:`COARSE_WORK_MARGIN` (benchmarks/bench_memory.py: the default build peaks
+#: 3 to 6 % under the figures themselves, from run to run up to 4 % apart); between the two
+#: tolerances the factor goes linearly in log(tolerance) (measured: 0.002 mm needs 1.1).
+COARSE_TOLERANCE_MM = 0.01
+FINE_TOLERANCE_MM = 1e-4
+COARSE_WORK_MARGIN = 1.03
 #: The interference check meshes at no coarser than this (mm), so that the overlap allowed for
 #: chordal error (2 x tolerance) stays far below the interference it must detect.
 CHECK_TOLERANCE_MM = 0.002
@@ -75,6 +86,22 @@ def check_windows(design: PRSDesign) -> list[tuple[float, float]] | None:
     p = design.thread.pitch_mm
     cuts = [round(i * n / k) * p for i in range(1, k)]
     return list(zip([-math.inf, *cuts], [*cuts, math.inf]))
+
+
+def check_span(design: PRSDesign) -> tuple[float, float] | None:
+    """The axial span (screw frame, mm) the interference check meshes for an actuator: the
+    nut assembly at mid-stroke widened by one pitch at each end; None without an actuator.
+
+    Every part but the screw lies inside it, and the thread engagement is the same all along
+    the stroke, so the screw beyond it meets nothing the check looks for; the stroke ends
+    are checked analytically (:func:`prs_geom.geometry.actuator.stroke_end_checks`)."""
+    from prs_geom.geometry.actuator import actuator_layout
+
+    lay = actuator_layout(design)
+    if lay is None:
+        return None
+    p = design.thread.pitch_mm
+    return lay.nut_assembly_z[0] - p, lay.nut_assembly_z[1] + p
 
 
 def available_memory_bytes() -> int:
@@ -140,15 +167,24 @@ def _half_step(sagitta_ratio: float) -> float:
 DATUM_SLOT_TRIANGLES = {False: 40.0, True: 80.0}
 
 
-def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
+#: Triangles the two run-outs of an actuator's part add, per column of a turn (the tools
+#: have as many segments, :func:`prs_geom.mesh.thread.apply_run_outs`): measured on the
+#: default, a tiny and an 8-tooth design at 0.01 and 0.002 mm, the wheel exits 1.2 to 21 a
+#: column on the screw, the chamfers 1.1 to 2.4 on the roller and 6.9 to 7.7 on the nut.
+RUN_OUT_TRIANGLES = {"screw": 21.0, "roller": 2.0, "nut": 7.0}
+
+
+def part_triangles(design: PRSDesign, tol: float, screw_length: float | None = None) -> dict[str, float]:
     """Estimated triangles of the screw, roller and nut meshes at chord tolerance ``tol`` (mm),
-    as floats (a length of 1e300 mm gives an estimate, not an overflow)."""
-    from prs_geom.geometry.frames import thread_length
+    as floats (a length of 1e300 mm gives an estimate, not an overflow); ``screw_length``:
+    the screw meshed over this length (mm) only, as the interference check does."""
+    from prs_geom.geometry.frames import screw_thread_length, thread_length
     from prs_geom.mesh.thread import choose_tessellation, part_chord_tolerance
     from prs_geom.geometry.profiles import ThreadProfiles
 
     prof = ThreadProfiles.from_design(design)
-    lengths = {"screw": design.screw.length_mm, "roller": thread_length(design), "nut": thread_length(design)}
+    lengths = {"screw": screw_thread_length(design) if screw_length is None else screw_length,
+               "roller": thread_length(design), "nut": thread_length(design)}
     out = {}
     for name in ("screw", "roller", "nut"):
         p = getattr(prof, name)
@@ -164,6 +200,8 @@ def part_triangles(design: PRSDesign, tol: float) -> dict[str, float]:
         # the datum slot: its five faces and the re-triangulated face A around it (measured
         # 36 to 82 triangles on the default and test designs)
         out[name] = surface + ends + DATUM_SLOT_TRIANGLES[p.internal]
+        if design.has_actuator:   # the run-outs re-triangulate both ends (RUN_OUT_TRIANGLES)
+            out[name] += RUN_OUT_TRIANGLES[name] * tess.columns_per_turn
     return out
 
 
@@ -194,7 +232,9 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers
     export_tri = sum(parts.values())
     placed = parts["screw"] + parts["nut"] + design.roller.count * parts["roller"]
     check_tol = min(tol, CHECK_TOLERANCE_MM)
-    check_tri = sum(part_triangles(design, check_tol).values()) if check else 0
+    span = check_span(design)
+    check_tri = sum(part_triangles(design, check_tol, None if span is None else span[1] - span[0]).values()) \
+        if check else 0
     if check_windows(design) is not None:
         # one window (plus a pitch of margin at each end) is meshed at a time; the screw
         # is longer than the engaged length, so this share over-counts it
@@ -204,9 +244,19 @@ def estimate(design: PRSDesign, export: bool = True, check: bool = True, workers
         peaks.append(export_tri * BYTES_PER_EXPORT_TRIANGLE + placed * BYTES_PER_PLACED_TRIANGLE)
     if check:
         peaks.append(check_tri * BYTES_PER_CHECK_TRIANGLE)
-    work = WORK_MARGIN * (sum(peaks) if workers > 0 else max(peaks))
+    work = work_margin(tol) * (sum(peaks) if workers > 0 else max(peaks))
     return Estimate(export_triangles=export_tri if export else 0.0, placed_triangles=placed if export else 0.0,
-                    check_triangles=check_tri, peak_bytes=BASE_BYTES * (1 + max(workers, 0)) + work, parts=parts)
+                    check_triangles=check_tri, peak_bytes=BASE_BYTES + WORKER_BASE_BYTES * max(workers, 0) + work,
+                    parts=parts)
+
+
+def work_margin(tol: float) -> float:
+    """The factor on the per-triangle figures at chord tolerance ``tol`` (mm):
+    :data:`COARSE_WORK_MARGIN` at and above :data:`COARSE_TOLERANCE_MM`, :data:`WORK_MARGIN`
+    at and below :data:`FINE_TOLERANCE_MM`, linear in log(tol) between."""
+    lo, hi = math.log(FINE_TOLERANCE_MM), math.log(COARSE_TOLERANCE_MM)
+    x = min(max((math.log(tol) - lo) / (hi - lo), 0.0), 1.0)
+    return WORK_MARGIN + (COARSE_WORK_MARGIN - WORK_MARGIN) * x
 
 
 def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = True,
@@ -220,7 +270,9 @@ def guard(design: PRSDesign, budget_bytes: int | None = None, export: bool = Tru
     budget = default_budget_bytes() if budget_bytes is None else budget_bytes
     if est.peak_bytes > budget:
         biggest = max(est.parts, key=est.parts.get)
-        length_field = ("screw.length_mm", design.screw.length_mm) if biggest == "screw" else \
+        length_field = (("actuator.stroke_mm", design.actuator.stroke_mm) if design.has_actuator and
+                        design.screw.length_mm is None else ("screw.length_mm", design.screw.length_mm)) \
+            if biggest == "screw" else \
             ("thread.engaged_teeth", design.thread.engaged_teeth)
         source = ("set by --memory-budget" if budget_bytes is not None else
                   f"set by ${MEMORY_BUDGET_ENV}" if os.environ.get(MEMORY_BUDGET_ENV) else

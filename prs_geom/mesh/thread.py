@@ -20,6 +20,9 @@ the work per vertex and per triangle is a few numpy passes, see :func:`thread_me
 * :func:`thread_mesh` runs these as named steps: strands, column sampling, end points and
   end polygons, band chains, end faces (:func:`_end_faces`, the only step that closes the
   ends), then the vertex and face arrays.
+* Thread run-outs (:func:`apply_run_outs`: the screw's grinding-wheel exit, the chamfers
+  of roller and nut) and the angular datum mark (:func:`cut_datum_mark`) are manifold3d
+  booleans on the finished mesh; the face kinds are carried through manifold3d's face ids.
 
 Tessellation from the chordal tolerance ``tol`` (mm): half of it for the helix sagitta
 r (1 - cos(dtheta / 2)) at the outermost radius, a quarter for the profile chord (the
@@ -37,7 +40,9 @@ from __future__ import annotations
 
 import math
 import dataclasses
+import functools
 from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -50,14 +55,16 @@ from prs_geom.geometry.profiles import ThreadProfile
 
 __all__ = [
     "COLUMN_MARGIN", "DEVIATION_CHUNK_FACES", "EndPolygon", "FACE_BODY", "FACE_END_HI", "FACE_END_LO",
-    "FACE_MARK", "FACE_THREAD", "Tessellation", "ThreadMesh", "VOLUME_ACCURACY", "analytic_radius",
-    "analytic_thread_volume", "axial_line_crossings", "choose_tessellation", "cut_datum_mark",
-    "deviation_warnings", "flank_distance", "float32_rounding", "from_manifold", "manifold_status",
-    "measure_deviation", "merge_strips", "mesh_report", "part_chord_tolerance", "profile_distance",
-    "profile_strands", "thread_mesh", "to_manifold",
+    "FACE_MARK", "FACE_RUN_OUT", "FACE_THREAD", "RUN_OUT_CREST_GAP_MM", "RUN_OUT_KINDS",
+    "RUN_OUT_OVERSHOOT_MM", "RUN_OUT_ROOT_MARGIN_MM", "RunOut", "run_out_volume", "Tessellation", "ThreadMesh",
+    "VOLUME_ACCURACY", "analytic_radius", "analytic_thread_volume", "apply_run_outs", "axial_line_crossings",
+    "choose_tessellation", "cut_datum_mark", "deviation_warnings", "flank_distance", "float32_rounding",
+    "from_manifold", "manifold_status", "measure_deviation", "merge_strips", "mesh_report",
+    "part_chord_tolerance", "profile_distance", "profile_strands", "run_out_distance", "thread_mesh",
+    "to_manifold",
 ]
 
-FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY, FACE_MARK = 0, 1, 2, 3, 4
+FACE_THREAD, FACE_END_LO, FACE_END_HI, FACE_BODY, FACE_MARK, FACE_RUN_OUT = 0, 1, 2, 3, 4, 5
 #: Columns closer than this fraction of a column step to a strand end are dropped, so
 #: that no sliver triangles appear next to the end planes.
 COLUMN_MARGIN = 0.05
@@ -123,8 +130,9 @@ class ThreadMesh:
     """A part mesh with the data needed to check it against its analytic surface.
 
     Vertices are in the part frame (z along the part axis); ``face_kind`` labels thread
-    surface, lower/upper end faces, the nut's outer body cylinder and the walls and floor
-    of the angular datum mark (``datum_mark``, :mod:`prs_geom.geometry.datum`).
+    surface, lower/upper end faces, the nut's outer body cylinder, the walls and floor
+    of the angular datum mark (``datum_mark``, :mod:`prs_geom.geometry.datum`) and the
+    thread run-outs (``run_outs``, :func:`apply_run_outs`).
     """
 
     part: str
@@ -140,6 +148,7 @@ class ThreadMesh:
     body_radius: float | None = None
     meta: dict[str, Any] = field(default_factory=dict)
     datum_mark: DatumMark | None = None
+    run_outs: tuple[RunOut, ...] = ()
 
     def to_trimesh(self) -> trimesh.Trimesh:
         return trimesh.Trimesh(self.vertices, self.faces, process=False, validate=False)
@@ -826,13 +835,18 @@ def _band_rows(faces: NDArray[np.int64], row0: NDArray, n_rows: NDArray, first: 
     np.cumsum(flat, out=flat)
 
 
-def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
-    """``tm`` with the angular datum slot ``mark`` cut out of its face A (manifold3d, float64).
+def _boolean_keeping_kinds(tm: ThreadMesh, tools: Sequence[tuple[str, Callable[[], Any], int]],
+                           what: str) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int8]]:
+    """Vertices, faces and face kinds of ``tm`` with the ``tools`` (operation "add" or
+    "subtract", a function building the manifold3d solid in the part frame, face kind)
+    applied in order, in one manifold3d pass (float64; building the part's solid is most
+    of its cost). The tools are built after the part: manifold3d numbers its inputs in
+    the order they are built and orders the output's triangles by that number.
 
-    The boolean keeps every vertex of ``tm`` bit for bit (it only adds the vertices where
-    the slot meets face A and the slot's own corners) and carries each face's kind over
-    through manifold3d's face ids; the slot's walls and floor get ``FACE_MARK``. The slot
-    is symmetric about y = 0, so it is the same on right- and left-hand parts.
+    manifold3d keeps every vertex of ``tm`` that no tool touches bit for bit and tells for
+    each output triangle the input it came from (its run's original id) and its face id
+    there: the faces of ``tm`` keep their kind, each tool's faces get the tool's kind.
+    ``what`` names the operation in the error message.
     """
     import manifold3d
 
@@ -841,21 +855,349 @@ def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
         np.ascontiguousarray(tm.vertices, dtype=np.float64), np.ascontiguousarray(tm.faces, dtype=np.uint64),
         face_id=np.arange(n_faces, dtype=np.uint64)))
     part_id = int(np.asarray(part.to_mesh64().run_original_id)[0])   # the id manifold3d gave the input
-    (x0, y0, z0), (x1, y1, z1) = mark.box(overshoot=1.0)
-    slot = manifold3d.Manifold.cube([x1 - x0, y1 - y0, z1 - z0]).translate([x0, y0, z0])
-    cut = part - slot
-    if cut.status() != manifold3d.Error.NoError:   # pragma: no cover - manifold3d refuses only broken input
-        raise RuntimeError(f"datum mark cut of the {tm.part} failed: {cut.status()}")
-    out = cut.to_mesh64()
+    solid, tool_kind = part, {}
+    for op, build, face_kind in tools:
+        tool = build()
+        solid = solid + tool if op == "add" else solid - tool
+        if len(tools) > 1:   # a tool may be a union of originals: each of its ids
+            tool_kind.update(dict.fromkeys(np.asarray(tool.to_mesh64().run_original_id).tolist(), face_kind))
+    if solid.status() != manifold3d.Error.NoError:   # pragma: no cover - manifold3d refuses only broken input
+        raise RuntimeError(f"{what} of the {tm.part} failed: {solid.status()}")
+    out = solid.to_mesh64()
     V = np.array(np.asarray(out.vert_properties)[:, :3], dtype=np.float64, order="C")  # writable copy
     F = np.array(out.tri_verts, dtype=np.int64, order="C")
     # triangles are grouped in runs, one per input manifold; face ids index into that input
     run_index = np.asarray(out.run_index, dtype=np.int64)
     run_of_face = np.searchsorted(run_index[1:], np.arange(len(F)) * 3, side="right")
-    from_part = np.asarray(out.run_original_id)[run_of_face] == part_id
-    kind = np.full(len(F), FACE_MARK, np.int8)
+    run_ids = np.asarray(out.run_original_id)
+    run_kind = np.array([tool_kind.get(i, tools[-1][2]) for i in run_ids.tolist()], np.int8)  # one per run
+    from_part = run_ids[run_of_face] == part_id
+    kind = run_kind[run_of_face]
     kind[from_part] = tm.face_kind[np.asarray(out.face_id, dtype=np.int64)[from_part]]
+    return V, F, kind
+
+
+def cut_datum_mark(tm: ThreadMesh, mark: DatumMark) -> ThreadMesh:
+    """``tm`` with the angular datum slot ``mark`` cut out of its face A (manifold3d, float64).
+
+    The boolean keeps every vertex of ``tm`` bit for bit (it only adds the vertices where
+    the slot meets face A and the slot's own corners) and carries each face's kind over
+    through manifold3d's face ids; the slot's walls and floor get ``FACE_MARK``. The slot
+    is symmetric about y = 0, so it is the same on right- and left-hand parts.
+    """
+    V, F, kind = _boolean_keeping_kinds(tm, [("subtract", lambda: _datum_slot(mark), FACE_MARK)], "datum mark cut")
     return dataclasses.replace(tm, vertices=V, faces=F, face_kind=kind, meta=dict(tm.meta), datum_mark=mark)
+
+
+def _datum_slot(mark: DatumMark) -> Any:
+    """The manifold3d box of the datum slot, reaching 1 mm out of face A."""
+    import manifold3d
+
+    (x0, y0, z0), (x1, y1, z1) = mark.box(overshoot=1.0)
+    return manifold3d.Manifold.cube([x1 - x0, y1 - y0, z1 - z0]).translate([x0, y0, z0])
+
+
+# --------------------------------------------------------------------------- run-outs
+#: The wheel exit's frustum ends this far (mm) below the crest radius at the end plane. A
+#: cone meeting the crest cylinder exactly would make coincident surfaces whose two
+#: samplings differ by nanometres, which an STL cannot tell from one vertex; 5 um keeps the
+#: surfaces apart (by at least that much, see :func:`_run_out_segments`) and is far below
+#: any grinding tolerance.
+RUN_OUT_CREST_GAP_MM = 0.005
+#: The frustum's inner end lies this far (mm) below the root radius, so that its inner base
+#: is buried in the core and the root rises from the full groove depth.
+RUN_OUT_ROOT_MARGIN_MM = 0.02
+#: The chamfer tools reach this far (mm) out of the end plane and beyond the crest, so that
+#: no face of a tool lies in a face of the part.
+RUN_OUT_OVERSHOOT_MM = 1.0
+#: The run-out kinds of :class:`RunOut`.
+RUN_OUT_KINDS = ("wheel-exit", "chamfer")
+
+
+@dataclass(frozen=True)
+class RunOut:
+    """A thread run-out at one end plane of a part (applied by :func:`apply_run_outs`).
+
+    Attributes
+    ----------
+    end : str
+        "lo" or "hi": the end plane z_lo or z_hi of the part (part frame, z along the axis).
+    kind : str
+        "wheel-exit": an external thread running out into free shaft (the screw): over the
+        last ``length_mm`` before the end plane the groove's root rises linearly from the
+        root radius to the crest radius (the grinding wheel leaving the groove); the flanks
+        are unchanged (the real wheel exit also narrows the groove: left out).
+        "chamfer": a thread running into a shoulder (roller gear faces, nut ring-gear seats):
+        a 45 degree chamfer of the crest, from the crest ``length_mm`` inside the end plane
+        to ``length_mm`` below the crest (external; above it, internal) in the end plane.
+        ``length_mm`` = |crest - pitch radius| chamfers down to the pitch radius.
+    length_mm : float
+        Axial length (mm): the wheel exit's length, or the chamfer's axial size.
+    """
+
+    end: str
+    kind: str
+    length_mm: float
+
+    def __post_init__(self) -> None:
+        if self.end not in ("lo", "hi"):
+            raise ValueError(f"RunOut.end = {self.end!r}: must be 'lo' or 'hi' (the end plane z_lo or z_hi)")
+        if self.kind not in RUN_OUT_KINDS:
+            raise ValueError(f"RunOut.kind = {self.kind!r}: must be one of {RUN_OUT_KINDS}")
+        if not (math.isfinite(self.length_mm) and self.length_mm > 0.0):
+            raise ValueError(f"RunOut.length_mm = {self.length_mm!r}: must be a finite length > 0 mm")
+
+
+def run_out_volume(profile: ThreadProfile, run_out: RunOut) -> float:
+    """Volume (mm^3) a run-out adds to a constant-pitch part (negative: removes), from the
+    profile alone.
+
+    Around the axis at radius r the material fills the fraction f(r) = 2 t(r) / p of every
+    axial pitch (t the tooth half-width, :meth:`ThreadProfile.tooth_half_width`; for a
+    helix the same fraction of every circle), so a solid of revolution that covers the
+    axial length l(r) at radius r changes the volume by the integral of 2 pi r l(r) (1 - f)
+    dr (filled grooves) or of 2 pi r l(r) f dr (cut teeth). l(r) is linear in r for both
+    tools (:class:`RunOut`): the frustum from the root (less its margin) at the inner end
+    to the crest less :data:`RUN_OUT_CREST_GAP_MM` at the end plane, and the 45 degree
+    chamfer. Both radial ranges lie between the root and the crest, on the flank, where f is
+    smooth: 64-point Gauss-Legendre quadrature gives it to about 1e-12 relative (the same
+    with 128 points).
+    """
+    rc, rr = profile.crest_radius, profile.root_radius
+    L = run_out.length_mm
+    if run_out.kind == "wheel-exit":
+        r_end, r_in = rc - RUN_OUT_CREST_GAP_MM, rr - RUN_OUT_ROOT_MARGIN_MM
+        lo, hi = rr, r_end                       # below the root the groove fraction is 0
+        length = lambda r: L * (r_end - r) / (r_end - r_in)
+        weight = lambda r: 1.0 - 2.0 * profile.tooth_half_width(r) / profile.pitch
+        sign = 1.0
+    else:
+        r_e = rc + (L if profile.internal else -L)
+        lo, hi = (rc, r_e) if profile.internal else (r_e, rc)
+        length = (lambda r: r_e - r) if profile.internal else (lambda r: r - r_e)
+        weight = lambda r: 2.0 * profile.tooth_half_width(r) / profile.pitch
+        sign = -1.0
+    x, w = np.polynomial.legendre.leggauss(64)
+    a, b = min(lo, hi), max(lo, hi)
+    r = 0.5 * (b - a) * x + 0.5 * (b + a)
+    return sign * float(np.sum(0.5 * (b - a) * w * 2.0 * math.pi * r * length(r) * weight(r)))
+
+
+def _check_run_outs(profile: ThreadProfile, run_outs: Sequence[RunOut], part_length: float) -> None:
+    """Raise ValueError (field, value, rule) for run-outs ``profile`` cannot take on a part of
+    axial length ``part_length`` (mm)."""
+    ends = [ro.end for ro in run_outs]
+    if len(set(ends)) != len(ends):
+        raise ValueError(f"RunOut.end: {ends} names an end twice; a part takes one run-out per end")
+    chamfer_max = abs(profile.crest_radius - profile.pitch_radius)
+    for ro in run_outs:
+        if not ro.length_mm < 0.5 * part_length:
+            raise ValueError(f"RunOut.length_mm = {ro.length_mm!r} at end {ro.end!r}: must be below half the "
+                             f"{profile.part}'s thread length {part_length:g} mm")
+        if ro.kind == "wheel-exit" and profile.internal:
+            raise ValueError(f"RunOut.kind = 'wheel-exit' on the {profile.part}: a grinding-wheel exit needs "
+                             "an external thread")
+        if ro.kind == "chamfer" and ro.length_mm > chamfer_max * (1.0 + 1e-9):
+            raise ValueError(f"RunOut.length_mm = {ro.length_mm!r} (chamfer at end {ro.end!r}): must not exceed "
+                             f"|crest - pitch radius| = {chamfer_max:g} mm of the {profile.part}; a deeper "
+                             "chamfer reaches the flank contacts near the pitch radius")
+
+
+def _end_plane(tm: ThreadMesh, ro: RunOut) -> tuple[float, float]:
+    """The end plane z (mm) of ``ro`` and its outward sign s: the axial depth into the part
+    of a point at z is d = s (z_end - z)."""
+    return (tm.z_hi, 1.0) if ro.end == "hi" else (tm.z_lo, -1.0)
+
+
+def _run_out_outline(tm: ThreadMesh, ro: RunOut) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The run-out of ``tm`` in the axial half-plane, in (r, d) coordinates (mm; d: the axial
+    depth from the end plane into the part, :func:`_end_plane`).
+
+    Returns the tool polygon (m, 2) to revolve (added for a wheel exit, removed for a
+    chamfer) and the segments (k, 2, 2) of the tool's surface that can be faces of the
+    result: the analytic run-out surface :func:`measure_deviation` checks against.
+    The wheel exit's frustum is clipped to the piece ``tm`` (a window may end inside it).
+    """
+    prof = tm.profile
+    rc, L = prof.crest_radius, ro.length_mm
+    o = RUN_OUT_OVERSHOOT_MM
+    if ro.kind == "wheel-exit":
+        r_end, r_in = rc - RUN_OUT_CREST_GAP_MM, prof.root_radius - RUN_OUT_ROOT_MARGIN_MM
+        d_far = min(L, tm.z_hi - tm.z_lo)
+        r_far = r_end + (r_in - r_end) * d_far / L
+        poly = np.array([[0.0, 0.0], [r_end, 0.0], [r_far, d_far], [0.0, d_far]])
+        # the far base is buried in the core unless a window clips the frustum
+        return poly, np.stack([poly[:3], poly[1:4]], axis=1)[: 3 if d_far < L else 2]
+    segment = np.array([[[rc + (L if prof.internal else -L), 0.0], [rc, L]]])
+    r_e = float(segment[0, 0, 0])
+    if prof.internal:   # countersink: r < r_e - d, inside the bore, short of the body
+        o = min(o, 0.5 * (tm.body_radius - r_e))
+        r_in = rc - min(RUN_OUT_OVERSHOOT_MM, 0.5 * rc)
+        poly = np.array([[r_e + o, -o], [r_in, -o], [r_in, r_e - r_in]])
+    else:               # r > r_e + d, beyond the crest
+        o = min(o, 0.5 * r_e)
+        R = rc + RUN_OUT_OVERSHOOT_MM
+        poly = np.array([[r_e - o, -o], [R, -o], [R, R - r_e]])
+    return poly, segment
+
+
+def _run_out_segments(tm: ThreadMesh) -> int:
+    """Angular segments of the run-out tools: a multiple of the thread's columns per turn
+    whose sagitta r (1 - cos(pi / n)) at the outer radius r is within ``tm.chord_tolerance``.
+
+    The tools' vertices then lie at the thread's column angles k 2 pi / n_columns (and
+    between), so near the crest the frustum's polygon runs parallel to the crest's, 5 um
+    (:data:`RUN_OUT_CREST_GAP_MM`) inside, and never within nanometres of it.
+    """
+    tol, r = tm.chord_tolerance, tm.profile.outer_radius
+    n_cols = choose_tessellation(tm.profile, tol).columns_per_turn
+    n_sag = int(math.ceil(math.pi / math.acos(1.0 - tol / r)))
+    return n_cols * int(math.ceil(n_sag / n_cols))
+
+
+def _revolved(poly_rz: NDArray[np.float64], n: int) -> Any:
+    """The manifold3d solid of the polygon ``poly_rz`` ((m, 2): r >= 0, z; mm, part frame)
+    revolved about the z axis in ``n`` segments, vertices at theta = 2 pi k / n.
+
+    Built from exact float64 vertices (a CrossSection would round them to its fixed
+    precision, and a frustum's base must lie exactly in the end plane). cos and sin are
+    mirrored exactly (k and n - k), so the solid is the same for left-hand parts. Vertices
+    with r = 0 are one vertex on the axis.
+    """
+    import manifold3d
+
+    r, z = poly_rz[:, 0], poly_rz[:, 1]
+    if np.sum(r * np.roll(z, -1) - np.roll(r, -1) * z) < 0:   # counter-clockwise in (r, z): outward normals
+        r, z = r[::-1], z[::-1]
+    k = np.arange(n)
+    half = np.minimum(k, n - k)
+    cos, sin = np.cos(2 * math.pi * half / n), np.sign(n - 2 * k) * np.sin(2 * math.pi * half / n)
+    on_axis = r == 0.0
+    count = np.where(on_axis, 1, n)
+    first = np.cumsum(count) - count
+    ring = np.arange(int(count.sum())) - np.repeat(first, count)        # k of each vertex in its ring
+    V = np.column_stack([np.repeat(r, count) * cos[ring], np.repeat(r, count) * sin[ring], np.repeat(z, count)])
+    ids = first[:, None] + np.where(on_axis[:, None], 0, k[None, :])                   # (m, n)
+    a, b = ids, np.roll(ids, -1, axis=1)
+    c, d = np.roll(b, -1, axis=0), np.roll(a, -1, axis=0)
+    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]         # fans at the axis
+    return manifold3d.Manifold(manifold3d.Mesh64(np.ascontiguousarray(V), np.ascontiguousarray(F, dtype=np.uint64)))
+
+
+def apply_run_outs(tm: ThreadMesh, run_outs: Sequence[RunOut], part_range: tuple[float, float] | None = None,
+                   mark: DatumMark | None = None) -> ThreadMesh:
+    """``tm`` with thread run-outs at its end planes (manifold3d booleans, float64).
+
+    Rules (mm, part frame: z along the axis, right-handed; every tool is a solid of
+    revolution, so the result is the same for left-hand parts):
+
+    * "wheel-exit" (external threads only): union with a frustum whose radius rises
+      linearly from root - :data:`RUN_OUT_ROOT_MARGIN_MM` at depth ``length_mm`` to
+      crest - :data:`RUN_OUT_CREST_GAP_MM` in the end plane, so the groove's root rises
+      from the root to the crest; the flanks are unchanged (the real wheel exit also
+      narrows the groove: left out). The frustum ends in the end plane: its base is
+      coplanar with the end face, which manifold3d unites into one clean face.
+    * "chamfer": subtract the region r > r_e + d (external) or r < r_e - d (internal, a
+      countersink), d the depth from the end plane, r_e = crest -/+ ``length_mm``: a
+      45 degree chamfer of the crest. The tool reaches :data:`RUN_OUT_OVERSHOOT_MM` out of
+      the end plane and beyond the crest, and stays inside the nut's body radius.
+
+    The tools' polygons keep their sagitta within ``tm.chord_tolerance``
+    (:func:`_run_out_segments`). The thread's faces keep their kinds; the run-out faces get
+    ``FACE_RUN_OUT``. A chamfer down to the pitch radius never reaches a flank contact
+    (those lie at least p / 4 from the end planes near the pitch radius).
+
+    Parameters
+    ----------
+    tm : ThreadMesh
+        The part, or a piece of it between window planes (:func:`thread_mesh`).
+    run_outs : sequence of RunOut
+        At most one per end.
+    part_range : (float, float), optional
+        The whole part's end planes (mm) when ``tm`` is a piece of it: the run-outs are
+        checked against that length and applied only at the ends the piece reaches (a
+        wheel exit reaching past the piece is clipped to it). Default: ``tm``'s own planes.
+    mark : DatumMark, optional
+        Also cut this datum mark, after the run-outs, as :func:`cut_datum_mark` does, but
+        in the same manifold3d pass (building the part's solid is most of a pass's cost).
+
+    Returns
+    -------
+    ThreadMesh
+        A copy with the run-outs applied and recorded in ``run_outs`` (without a run-out
+        to apply: ``tm`` itself, or ``cut_datum_mark(tm, mark)``).
+
+    Raises
+    ------
+    ValueError
+        A wheel exit on an internal thread, a length not below half the part's length, a
+        chamfer deeper than |crest - pitch radius|, or two run-outs at one end (counting
+        those ``tm`` already has).
+    """
+    lo, hi = part_range or (tm.z_lo, tm.z_hi)
+    _check_run_outs(tm.profile, (*tm.run_outs, *run_outs), hi - lo)
+    applied = tuple(ro for ro in run_outs if (tm.z_lo == lo if ro.end == "lo" else tm.z_hi == hi))
+    if not applied:
+        return tm if mark is None else cut_datum_mark(tm, mark)
+    wheel_exits = [ro for ro in applied if ro.kind == "wheel-exit"]
+    chamfers = [ro for ro in applied if ro.kind == "chamfer"]
+    steps = [(op, functools.partial(_run_out_tools, tm, tools), FACE_RUN_OUT)
+             for op, tools in (("add", wheel_exits), ("subtract", chamfers)) if tools]
+    if mark is not None:
+        steps.append(("subtract", functools.partial(_datum_slot, mark), FACE_MARK))
+    V, F, kind = _boolean_keeping_kinds(tm, steps, "thread run-out")
+    return dataclasses.replace(tm, vertices=V, faces=F, face_kind=kind, meta=dict(tm.meta),
+                               run_outs=tm.run_outs + applied, datum_mark=mark or tm.datum_mark)
+
+
+def _run_out_tools(tm: ThreadMesh, run_outs: Sequence[RunOut]) -> Any:
+    """The union of the tools (manifold3d solids, part frame) of ``run_outs`` on ``tm``."""
+    n = _run_out_segments(tm)
+    solid = None
+    for ro in run_outs:   # at most two: one per end
+        z_end, s = _end_plane(tm, ro)
+        poly, _ = _run_out_outline(tm, ro)
+        tool = _revolved(np.column_stack([poly[:, 0], z_end - s * poly[:, 1]]), n)
+        solid = tool if solid is None else solid + tool
+    return solid
+
+
+def _segment_distance(r: NDArray, d: NDArray, segments: NDArray) -> NDArray:
+    """Distance (mm) in the axial half-plane from the points (r, d) to the nearest of the
+    segments ((k, 2, 2): end points (r, d))."""
+    P = np.stack([r, d], axis=-1)[:, None, :]                  # (N, 1, 2)
+    A, B = segments[None, :, 0, :], segments[None, :, 1, :]    # (1, k, 2)
+    AB = B - A
+    t = np.clip(np.sum((P - A) * AB, -1) / np.sum(AB * AB, -1), 0.0, 1.0)
+    return np.min(np.linalg.norm(P - A - t[..., None] * AB, axis=-1), axis=1, initial=np.inf)
+
+
+def run_out_distance(tm: ThreadMesh, r: NDArray, z: NDArray) -> NDArray:
+    """Distance (mm) in the axial half-plane from the points (r, z) (part frame) to the
+    nearest analytic run-out surface of ``tm``: the wheel exit's cone |r - r_cone(z)| and
+    its base in the end plane, the chamfer's 45 degree cone |(r - r_e) -/+ d| / sqrt(2)
+    (d the depth from the end plane), each bounded to its extent. Surfaces of revolution:
+    this is the 3D distance."""
+    best = np.full(np.shape(r), np.inf)
+    for ro in tm.run_outs:
+        z_end, s = _end_plane(tm, ro)
+        best = np.minimum(best, _segment_distance(r, s * (z_end - z), _run_out_outline(tm, ro)[1]))
+    return best
+
+
+def _wheel_exit_radius(tm: ThreadMesh, z: NDArray) -> NDArray:
+    """The largest radius (mm) a wheel-exit frustum of ``tm`` has in the plane z (part
+    frame), 0 where none reaches: end-face points of the screw out to it are legitimate."""
+    out = np.zeros(np.shape(z))
+    for ro in tm.run_outs:
+        if ro.kind == "wheel-exit":
+            z_end, s = _end_plane(tm, ro)
+            (_, (r_end, _), (r_far, d_far), _) = _run_out_outline(tm, ro)[0]
+            d = s * (z_end - z)
+            inside = (d >= 0.0) & (d <= d_far)
+            out = np.where(inside, np.maximum(out, r_end + (r_far - r_end) * d / d_far), out)
+    return out
 
 
 # --------------------------------------------------------------------------- checking
@@ -922,8 +1264,10 @@ def measure_deviation(tm: ThreadMesh) -> dict[str, float]:
     """Sample every face (7 points) and measure the distance to the analytic surface.
 
     Returns the largest deviation (mm) on the thread surface body, on the thread surface
-    next to the end planes, on the end faces (radial overshoot of the analytic end region)
-    and on the body cylinder, plus the number of sample points. The faces are sampled in
+    next to the end planes, on the end faces (radial overshoot of the analytic end region,
+    which a wheel exit widens to its frustum's base), on the body cylinder, on the datum
+    mark and on the run-out faces (:func:`run_out_distance`), plus the number of sample
+    points. The faces are sampled in
     chunks of :data:`DEVIATION_CHUNK_FACES` (every distance is per point, so the maxima
     do not depend on the chunking; only the memory does).
     """
@@ -963,9 +1307,15 @@ def _deviation_chunk(tm: ThreadMesh, V: NDArray[np.float64], faces: NDArray[np.i
     planar = np.abs(z[caps] - zc)
     if tm.profile.internal:
         over = np.maximum(rho - r[caps], 0.0) + np.maximum(r[caps] - tm.body_radius, 0.0)
+    elif any(ro.kind == "wheel-exit" for ro in tm.run_outs):
+        # the end face and the frustum's base are one face: out to either radius
+        over = np.maximum(r[caps] - np.maximum(rho, _wheel_exit_radius(tm, zc)), 0.0)
     else:
         over = np.maximum(r[caps] - rho, 0.0)
     out["max_deviation_end_face_mm"] = float(np.maximum(over, planar).max(initial=0.0))
+    if tm.run_outs:
+        run_out = kind == FACE_RUN_OUT
+        out["max_deviation_run_out_mm"] = float(run_out_distance(tm, r[run_out], z[run_out]).max(initial=0.0))
     if tm.body_radius is not None:
         body = kind == FACE_BODY
         out["max_deviation_body_cylinder_mm"] = float(np.abs(r[body] - tm.body_radius).max(initial=0.0))
@@ -1032,7 +1382,7 @@ def float32_rounding(vertices: NDArray[np.float64]) -> float:
 #: Region names of :func:`measure_deviation` as they read in a warning.
 _REGION_TEXT = {"body": "thread surface", "end": "thread surface next to the end planes",
                 "end_face": "end faces", "body_cylinder": "outer body cylinder",
-                "datum_mark": "angular datum mark"}
+                "datum_mark": "angular datum mark", "run_out": "thread run-outs"}
 
 
 def deviation_warnings(deviation: dict[str, float], tol: float) -> list[str]:

@@ -1,10 +1,14 @@
 """Part volumes from the assembly meshes.
 
 A *part* here is a rigid body of the placed assembly (:meth:`Assembly.rigid_body`): the
-screw; each roller with its end gears and journals (``roller_<k>``); the nut with its ring
-gears and ends (``nut``); each carrier (``carrier_lo``, ``carrier_hi``) and retaining ring
-(``retaining_ring_lo``, ``retaining_ring_hi``) when the design has the mechanism parts.
-Volumes are in mm^3, from the meshes (so within the meshes' chord tolerance of the solids).
+screw, with its ends for an actuator (``screw_end_lo``, ``screw_end_hi``, which overlap the
+thread over the run-outs); each roller with its end gears and journals (``roller_<k>``); the
+nut with its ring gears, ends and, for an actuator, its flange (``nut``); each carrier
+(``carrier_lo``, ``carrier_hi``) and retaining ring (``retaining_ring_lo``,
+``retaining_ring_hi``) when the design has the mechanism parts; an actuator's bearings,
+locknut and shaft ring (envelopes of purchased parts: the parts list prints no volume for
+them). Volumes are in mm^3, from the meshes (so within the meshes' chord tolerance of the
+solids).
 """
 from __future__ import annotations
 
@@ -28,7 +32,8 @@ def part_volumes(asm: Assembly) -> dict[str, float]:
 
     The sum of its scene parts' mesh volumes less the volume of every overlap of two of them
     (manifold3d), so that a part overlapping another of its body (the nut end around the ring
-    gear) counts once. Only pairs whose bounding boxes overlap with positive thickness on
+    gear, the flange around the nut end, a screw end inside the thread's run-out) counts
+    once. Only pairs whose bounding boxes overlap with positive thickness on
     every axis are intersected (parts that meet in an end face, like the threads and the
     gears, do not overlap); the result is exact while no three parts share a region, which
     the layout of docs/theory/mechanism.md guarantees. Bodies made of the same meshes (the

@@ -32,6 +32,7 @@ import warnings
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.errors import DesignError, DesignWarning
 from prs_geom.model.validation import (bounded, check_name, choice, force, integer, optional_force, optional_length,
                                        optional_size, pitch_list, positive, real, size)
@@ -115,8 +116,10 @@ class Screw:
     """The screw: external, multi-start, constant pitch.
 
     ``major_diameter_mm``/``minor_diameter_mm`` default to a truncation of
-    0.6/0.8 of the sharp-V half depth p/(4 tan beta); ``length_mm`` defaults to the
-    engaged length n p plus four pitches. Diameters are sizes (0.01 to 10000 mm), the
+    0.6/0.8 of the sharp-V half depth p/(4 tan beta); ``length_mm`` (threaded length)
+    defaults, for an actuator, to what the nut assembly, the stroke, the over-travels and the
+    run-outs need (:func:`prs_geom.geometry.actuator.actuator_layout`; it stays None here)
+    and otherwise to the engaged length n p plus four pitches. Diameters are sizes (0.01 to 10000 mm), the
     length an axial length (0.01 to 1e7 mm, at least n p).
     """
 
@@ -564,27 +567,32 @@ END_SUPPORTS = ("fixed-fixed", "fixed-supported", "supported-supported", "fixed-
 class Supports:
     """How the screw is held, for its critical speed and buckling load (docs/theory/ratings.md).
 
+    For an actuator (``[actuator]``) every length and fixity comes from the geometry: the
+    bearing positions, and the nut at its worst stroke end
+    (:func:`prs_geom.geometry.actuator.support_spans`); a value given here overrides it and
+    the build warns that it differs from the geometry. Without an actuator:
     ``unsupported_length_mm``: free length between the bearings (or bearing and nut) that
     bends and buckles (mm, 0.01 to 1e7: an axial length, the ratings go as 1/L^2);
     absent = ``screw.length_mm``. ``critical_speed_ends`` and
     ``buckling_ends``: the end fixity of each case, one of :data:`END_SUPPORTS` (a shaft
     may be mounted differently for whirl, where the nut does not hold it, than for
-    buckling). ``buckling_safety``: the permissible buckling load is the Euler load divided
+    buckling); absent = "fixed-supported". ``buckling_safety``: the permissible buckling load is the Euler load divided
     by this (>= 1). ``critical_speed_factor``: the permissible speed is this fraction of the
     first whirling speed (0.1 to 1; catalogues use 0.5 to 0.8, and a permissible speed of a
     few per cent of the whirling speed no longer says anything about it).
     """
 
     unsupported_length_mm: float | None = None
-    critical_speed_ends: str = "fixed-supported"
-    buckling_ends: str = "fixed-supported"
+    critical_speed_ends: str | None = None
+    buckling_ends: str | None = None
     buckling_safety: float = 2.0
     critical_speed_factor: float = 0.8
 
     def __post_init__(self) -> None:
         _set(self, "unsupported_length_mm", optional_length("unsupported_length_mm", self.unsupported_length_mm))
-        choice("critical_speed_ends", self.critical_speed_ends, END_SUPPORTS)
-        choice("buckling_ends", self.buckling_ends, END_SUPPORTS)
+        for name in ("critical_speed_ends", "buckling_ends"):
+            if getattr(self, name) is not None:
+                choice(name, getattr(self, name), END_SUPPORTS)
         _set(self, "buckling_safety", bounded("buckling_safety", self.buckling_safety, 1.0, 20.0,
                                               "must be from 1 to 20"))
         _set(self, "critical_speed_factor", bounded(
@@ -704,6 +712,7 @@ class PRSDesign:
     mesh: MeshSettings = field(default_factory=MeshSettings)
     gears: GearSettings = field(default_factory=GearSettings)
     mechanism: MechanismSettings = field(default_factory=MechanismSettings)
+    actuator: ActuatorSettings = field(default_factory=ActuatorSettings)
     #: optional: present only when the designer states tolerances (io reads it as a table)
     tolerances: Tolerances | None = field(default=None, metadata={"section": Tolerances})
     #: optional: screw supports for critical speed and buckling (absent: the defaults of
@@ -738,7 +747,9 @@ class PRSDesign:
         notes = {
             "screw.major_diameter_mm": f"screw.pitch_diameter_mm + 1.2 H = {s.pitch_diameter_mm!r} + 1.2 H, {h_from}",
             "screw.minor_diameter_mm": f"screw.pitch_diameter_mm - 1.6 H = {s.pitch_diameter_mm!r} - 1.6 H, {h_from}",
-            "screw.length_mm": f"(thread.engaged_teeth + 4) x thread.pitch_mm = ({n} + 4) x {p!r}",
+            "screw.length_mm": (f"(thread.engaged_teeth + 4) x thread.pitch_mm = ({n} + 4) x {p!r}"
+                                if not self.has_actuator else "the nut assembly + actuator.stroke_mm + 2 x "
+                                "(actuator.over_travel_mm + actuator.screw_run_out_mm)"),
             "roller.arc_radius_mm": (f"roller.pitch_diameter_mm / (2 sin thread.flank_half_angle_deg) = "
                                      f"{r.pitch_diameter_mm!r} / (2 sin {self.thread.flank_half_angle_deg!r})"),
             "roller.major_diameter_mm": f"roller.pitch_diameter_mm + 1.2 H = {r.pitch_diameter_mm!r} + 1.2 H, {h_from}",
@@ -757,7 +768,7 @@ class PRSDesign:
         _set(self, "screw", self._derived("screw", s, dict(
             major_diameter_mm=s.major_diameter_mm or _um(s.pitch_diameter_mm + 2 * add),
             minor_diameter_mm=s.minor_diameter_mm or _um(s.pitch_diameter_mm - 2 * ded),
-            length_mm=s.length_mm or (n + 4) * p,
+            length_mm=s.length_mm or (None if self.has_actuator else (n + 4) * p),
         )))
         _set(self, "roller", self._derived("roller", r, dict(
             arc_radius_mm=r.arc_radius_mm or 0.5 * r.pitch_diameter_mm / math.sin(beta),
@@ -939,7 +950,7 @@ class PRSDesign:
         p = self.thread.pitch_mm
         n = self.thread.engaged_teeth
         s, r, u = self.screw, self.roller, self.nut
-        if s.length_mm < n * p:
+        if s.length_mm is not None and s.length_mm < n * p:
             raise self._error("screw.length_mm", s.length_mm,
                               f"must be at least the engaged length n p = {n * p} mm (thread.engaged_teeth "
                               f"x thread.pitch_mm = {n} x {p!r})")
@@ -999,6 +1010,12 @@ class PRSDesign:
         return msgs
 
     # -- derived quantities ---------------------------------------------------
+    @property
+    def has_actuator(self) -> bool:
+        """True when the design is built as an actuator (stroke, screw ends, nut mounting):
+        ``actuator.enabled`` and the mechanism it mounts (``mechanism.enabled``)."""
+        return self.actuator.enabled and self.mechanism.enabled
+
     @property
     def graded(self) -> bool:
         """True when the roller or the nut carries a pitch list."""

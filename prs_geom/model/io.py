@@ -52,7 +52,7 @@ FIELD_COMMENTS: dict[str, str] = {
     "screw.starts": "screw starts n_s; lead = n_s p",
     "screw.major_diameter_mm": "crest (outside) diameter (mm)",
     "screw.minor_diameter_mm": "root diameter (mm)",
-    "screw.length_mm": "threaded length of the screw (mm), >= n p",
+    "screw.length_mm": "threaded length of the screw (mm), >= n p; omit for what the actuator's stroke needs",
     "roller.pitch_diameter_mm": "roller pitch diameter d_r (mm)",
     "roller.count": "number of rollers z, evenly spaced",
     "roller.arc_radius_mm": "flank arc radius r_T (mm), arc centred on the roller axis",
@@ -112,7 +112,8 @@ FIELD_COMMENTS: dict[str, str] = {
     "tolerances.source": "where these tolerances come from",
     "tolerances.target_ldc": "worst load-distribution coefficient the synthesis targeted",
     "tolerances.confidence": "probability of meeting target_ldc the synthesis guaranteed",
-    "supports.unsupported_length_mm": "free screw length between the supports (mm); omit for screw.length_mm",
+    "supports.unsupported_length_mm": "free screw length between the supports (mm); omit to take it from the "
+                                      "actuator's bearings (or screw.length_mm without an actuator)",
     "supports.critical_speed_ends": 'end fixity for the critical speed: "fixed-fixed", "fixed-supported", '
                                     '"supported-supported" or "fixed-free"',
     "supports.buckling_ends": 'end fixity for buckling: "fixed-fixed", "fixed-supported", '
@@ -129,6 +130,38 @@ FIELD_COMMENTS: dict[str, str] = {
     "rating.dn_limit_mm_rpm": "nut speed limit as nominal diameter x speed (mm/min)",
     "rating.required_static_safety": "smallest static safety s0 = C_0a / F_max the limit checks accept "
                                      "(1 to 20; catalogue: 2 without, 5 with vibration or impact)",
+    "actuator.enabled": "build the screw and nut as an actuator: stroke, screw ends, nut mounting (docs/theory/actuator.md)",
+    "actuator.stroke_mm": "nut travel along the screw (mm)",
+    "actuator.over_travel_mm": "full thread beyond each stroke end, for an end stop (mm)",
+    "actuator.screw_run_out_mm": "grinding-wheel exit at each screw thread end (mm); omit for one lead",
+    "actuator.thread_chamfer_mm": "45 deg chamfer ending the roller and nut threads (mm); omit for 0.8 x crest to pitch",
+    "actuator.fixed_end.bearing_series": 'ISO 15 dimension series of the 72xx B pair: "02" or "03"',
+    "actuator.fixed_end.bearing_bore_mm": "bearing bore (mm); omit for the largest below the screw root - 1 mm",
+    "actuator.fixed_end.bearing_width_mm": "bearing width (mm); omit for the ISO 15 table's",
+    "actuator.fixed_end.bearing_outer_diameter_mm": "bearing outside diameter (mm); omit for the ISO 15 table's",
+    "actuator.fixed_end.seat_tolerance": "ISO 286 zone of the bearing seat",
+    "actuator.fixed_end.locknut_thread_mm": "KM locknut thread diameter (mm, ISO 261 fine); omit for the bore",
+    "actuator.fixed_end.locknut_tolerance": "ISO 965-1 tolerance class of the locknut thread",
+    "actuator.fixed_end.undercut_width_mm": "thread undercut width (mm); omit for 3 x the thread pitch",
+    "actuator.floating_end.enabled": "false: no floating bearing (a fixed-free screw)",
+    "actuator.floating_end.bearing_series": 'ISO 15 dimension series of the 62xx bearing: "02" or "03"',
+    "actuator.floating_end.bearing_bore_mm": "bearing bore (mm); omit for the largest below the screw root - 1 mm",
+    "actuator.floating_end.bearing_width_mm": "bearing width (mm); omit for the ISO 15 table's",
+    "actuator.floating_end.bearing_outer_diameter_mm": "bearing outside diameter (mm); omit for the ISO 15 table's",
+    "actuator.floating_end.seat_tolerance": "ISO 286 zone of the bearing seat",
+    "actuator.drive.kind": '"key" (DIN 6885-1) or "flat" on the drive journal',
+    "actuator.drive.diameter_mm": "drive journal diameter (mm, ISO 775); omit for the largest the locknut passes",
+    "actuator.drive.length_mm": "drive journal length (mm); omit for the ISO 775 short series",
+    "actuator.drive.fit": "ISO 286 zone of the drive journal",
+    "actuator.drive.key_length_mm": "key (or flat) length (mm); omit for the longest standard <= journal - 4 mm",
+    "actuator.drive.flat_depth_mm": "depth of the flat (mm); omit for 0.1 x the journal diameter",
+    "actuator.nut_mount.kind": '"flange" (bolted, at the nut\'s loaded end; the one mounting so far)',
+    "actuator.nut_mount.bolt": 'flange bolts, ISO 4762 class 8.8 ("M6"); omit for the smallest carrying 2 x the load',
+    "actuator.nut_mount.bolt_count": "number of flange bolts",
+    "actuator.nut_mount.bolt_circle_diameter_mm": "bolt circle (mm); omit for nut diameter + head + 1 mm",
+    "actuator.nut_mount.flange_diameter_mm": "flange outside diameter (mm); omit for bolt circle + head + 2 mm",
+    "actuator.nut_mount.flange_thickness_mm": "flange thickness (mm); omit for 1.5 x the bolt diameter",
+    "actuator.nut_mount.bolt_length_mm": "flange bolt length (mm); omit for flange + 1.5 x bolt diameter, up to ISO 4762",
     "kind": 'kind of design: "prs" (default) or another product line',
     "format_version": "design-file format version (files without it are version 1)",
 }
@@ -192,7 +225,10 @@ def _nested_type(fld: dataclasses.Field) -> type | None:
 PRS_KINDS: dict[str, type] = {"prs": PRSDesign}
 #: Version of the design-file format this prs_geom writes. Files without the key are the
 #: first format (version 1, identical keys); a newer version is refused with a message.
-DESIGN_FORMAT_VERSION = 1
+#: Version 2 adds the ``[actuator]`` section. A version-1 file (or one without the key) that
+#: gives ``screw.length_mm`` (then the whole screw) reads as it did, without an actuator
+#: (``actuator.enabled = false``), unless it has the section.
+DESIGN_FORMAT_VERSION = 2
 
 
 def check_format_version(value: Any, what: str = "design file") -> int:
@@ -214,11 +250,17 @@ def design_from_dict(data: dict[str, Any], kinds: dict[str, type] | None = None)
     if not isinstance(data, dict):
         raise DesignError("design", data, "must be a table of keys (name, thread, screw, ...)")
     data = dict(data)
-    if "format_version" in data:
-        check_format_version(data.pop("format_version"))
+    version = check_format_version(data.pop("format_version")) if "format_version" in data else 1
     kind = data.pop("kind", "prs")
     if not isinstance(kind, str) or kind not in kinds:
         raise DesignError("kind", kind, "must be one of " + ", ".join(f'"{k}"' for k in kinds))
+    screw = data.get("screw")
+    if (kind == "prs" and version < 2 and "actuator" not in data and isinstance(screw, dict)
+            and "length_mm" in screw):
+        # in version 1 screw.length_mm was the whole screw: such a file reads as it did, with no
+        # stroke or ends (its screw is shorter than an actuator needs); one without it (an empty
+        # file) is today's default design, the actuator included
+        data["actuator"] = {"enabled": False}
     return build_section(kinds[kind], data, "")
 
 

@@ -64,7 +64,7 @@ from prs_geom.model.errors import DesignError
 __all__ = ["DELTA_UM", "DIN472_TABLE", "FIT_KINDS", "GRADES", "HOLE_LETTERS", "HOLE_LOWER_DEVIATION_UM",
            "HOLE_UPPER_BASE_UM", "ISO286_TABLE", "IT_GRADES_UM", "SHAFT_LETTERS", "SHAFT_LOWER_DEVIATION_UM",
            "SHAFT_UPPER_DEVIATION_UM", "SIZE_RANGES_MM", "SIZE_RANGE_UPPER_MM", "Fit", "FitLimits", "RetainingRing",
-           "StandardTableError", "ToleranceZone", "din472_ring", "din472_sizes", "it_tolerance_um", "size_range_index",
+           "StandardTableError", "ToleranceZone", "din472_ring", "din472_sizes", "nearest_sizes", "it_tolerance_um", "size_range_index",
            "size_range_mm", "tolerance_zone"]
 
 
@@ -659,9 +659,14 @@ def din472_ring(bore_mm: float) -> RetainingRing:
                                  groove_width_mm=m, edge_distance_mm=n, lug_width_mm=a,
                                  section_width_mm=b, lug_hole_mm=d5, free_diameter_mm=d3,
                                  groove_upper_mm=upper, groove_lower_mm=None if upper is None else 0.0)
-    below = [d for d in sizes if d < bore_mm][-1:]
-    above = [d for d in sizes if d > bore_mm][:1]
-    near = ", ".join(f"{d:g}" for d in below + above)
     raise StandardTableError(DIN472_TABLE, bore_mm, f"DIN 472 has no ring for a {bore_mm:g} mm bore (table sizes "
-                                                    f"only, {sizes[0]:g}-{sizes[-1]:g} mm); nearest sizes: {near} mm",
-                             sizes[0], sizes[-1])
+                                                    f"only, {sizes[0]:g}-{sizes[-1]:g} mm); nearest sizes: "
+                                                    f"{nearest_sizes(sizes, bore_mm)} mm", sizes[0], sizes[-1])
+
+
+def nearest_sizes(sizes: tuple[float, ...], value: float) -> str:
+    """The table sizes next to ``value`` below and above it, e.g. ``"40, 42"`` (for the
+    message of a size a table does not hold)."""
+    below = [d for d in sizes if d < value][-1:]
+    above = [d for d in sizes if d > value][:1]
+    return ", ".join(f"{d:g}" for d in below + above)

@@ -1,6 +1,7 @@
 // report.html 3D view: three.js (WebGL, depth-buffered) on the embedded scene data.
-// Frames: the data are in the screw frame, z along the screw axis, mm; the view turns them
-// to three.js's y-up. One BufferGeometry per distinct part mesh, one Mesh per placed part
+// Frames: the data are in the screw frame, z along the screw axis, mm; the view lays the axis
+// horizontal along three.js's x (y up), as a drawing does: a long actuator screw then fills the
+// landscape canvas. One BufferGeometry per distinct part mesh, one Mesh per placed part
 // (the rollers share one geometry). Drag to rotate, wheel to zoom, right-drag to pan.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -28,7 +29,7 @@ renderer.localClippingEnabled = true;
 const scene = new THREE.Scene();
 scene.background = new THREE.Color(BACKGROUND);
 const root = new THREE.Group();
-root.rotation.x = -Math.PI / 2;              // screw frame z-up -> three.js y-up
+root.rotation.y = Math.PI / 2;               // the screw axis (z) horizontal, along three.js x
 scene.add(root);
 
 const geometries = data.meshes.map(m => {
@@ -102,11 +103,27 @@ camera.add(key);                              // the light follows the view
 const controls = new OrbitControls(camera, canvas);
 controls.target.copy(sphere.center);
 
-// the camera distance at which the bounding sphere fits both the height and the width
+// the camera distance at which the view fits both the height and the width: a docs picture's
+// view scales the bounding sphere by its fit; by default every corner of the bounding box
+// projects inside the view with 4 % to spare (a long actuator screw would leave most of a
+// sphere's view empty)
 function fitDistance() {
   const half = THREE.MathUtils.degToRad(camera.fov / 2);
-  const halfH = Math.atan(Math.tan(half) * Math.min(1, camera.aspect));
-  return (data.view && data.view.fit ? data.view.fit : 1.04) * sphere.radius / Math.sin(halfH);
+  if (data.view && data.view.fit) {
+    const halfH = Math.atan(Math.tan(half) * Math.min(1, camera.aspect));
+    return data.view.fit * sphere.radius / Math.sin(halfH);
+  }
+  const tanV = Math.tan(half), tanH = tanV * camera.aspect;
+  const right = new THREE.Vector3().crossVectors(new THREE.Vector3(0, 1, 0), viewDir).normalize();
+  const up = new THREE.Vector3().crossVectors(viewDir, right);
+  let d = 0;
+  for (let i = 0; i < 8; i++) {
+    const c = new THREE.Vector3(i & 1 ? box.max.x : box.min.x, i & 2 ? box.max.y : box.min.y,
+                                i & 4 ? box.max.z : box.min.z).sub(sphere.center);
+    const z = c.dot(viewDir);
+    d = Math.max(d, z + Math.abs(c.dot(right)) / tanH, z + Math.abs(c.dot(up)) / tanV);
+  }
+  return 1.04 * d;
 }
 // optional view in the scene data (docs pictures): direction from the target, y up
 const viewDir = (data.view && data.view.direction ? new THREE.Vector3(...data.view.direction)
@@ -116,9 +133,9 @@ controls.update();
 
 function updateCut() {
   const cut = document.getElementById('cutaway').checked;
-  // normal from the camera to the axis, horizontal: the half nearer to the viewer is clipped
+  // normal from the camera to the axis, square to it: the half nearer to the viewer is clipped
   const n = new THREE.Vector3().subVectors(sphere.center, camera.position);
-  n.y = 0;
+  n.x = 0;
   if (n.lengthSq() < 1e-12) n.set(0, 0, -1);
   n.normalize();
   cutPlane.normal.copy(n);

@@ -1,0 +1,201 @@
+"""Meshes of the actuator parts of :mod:`prs_geom.geometry.actuator`: the screw ends, the
+support bearings, the KM locknut, the DIN 471 shaft ring and the nut flange.
+
+This module owns the solids outside the threads that the actuator layout places; the
+thread meshes (run-outs included) are :mod:`prs_geom.mesh.thread`'s. Every mesh is in the
+screw frame (mm, z along the axis) with the nut at mid-stroke, meshed like the mechanism
+parts (:mod:`prs_geom.mesh.mechanism`): polygons no coarser than
+:data:`~prs_geom.mesh.mechanism.MECHANISM_CHORD_MM`, an outside with its vertices on its
+circle (inside the true solid), a bore with its edges tangent to its circle (outside the
+true bore). A purchased part on a shaft step of the same nominal diameter (a bearing on its
+seat, the locknut on its thread, the shaft ring in its groove) therefore never overlaps the
+screw as meshes: the nominal line contact shows as a gap of at most the chordal deviation.
+
+* **Screw ends** (``screw_end_lo``, ``screw_end_hi``): the steps of
+  :class:`~prs_geom.geometry.actuator.ScrewEnd` revolved as one profile, with the run-out
+  span as a plain cylinder :data:`RUN_OUT_INSET_MM` (or the chord tolerance, if coarser)
+  inside the screw's root radius. That cylinder lies inside the thread's body, so the end
+  and the thread overlap there and unite into one connected screw (the run-out's groove
+  fill belongs to the thread mesh). The drive journal carries its DIN 6885-1 form A keyway
+  (width b, depth t1 from the journal surface, rounded ends of radius b / 2, over
+  ``key_z``) or its flat (a plane at ``flat_depth_mm`` below the journal surface over
+  ``key_z``), both on the +x side.
+* **Purchased parts** as their envelopes (:class:`RingEnvelope`, :func:`purchased_envelopes`):
+  each bearing a plain ring from bore to outside diameter over its width; the locknut a
+  ring from its thread diameter to its outside diameter; the DIN 471 ring a ring from the
+  groove diameter to the shaft diameter + 2 x :data:`SHAFT_RING_RIM_MM` over its thickness.
+* **Nut flange** (``nut_flange``): an annulus from the nut end's outside radius less
+  :data:`FLANGE_OVERLAP_MM` (it overlaps the nut end, the same rigid body, so the two unite)
+  to half the flange diameter over the flange's span, with ``bolt_count`` ISO 273
+  clearance holes on the bolt circle, the first at 180 / ``bolt_count`` degrees so that
+  none sits on the +x axis.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from prs_geom.geometry.actuator import ActuatorLayout, ScrewEnd
+from prs_geom.geometry.mechanism import MechanismLayout
+from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, _circle, _extruded, _trimesh, segments
+from prs_geom.model.design import PRSDesign
+
+__all__ = ["FLANGE_OVERLAP_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "RingEnvelope", "actuator_meshes",
+           "actuator_part_names", "purchased_envelopes"]
+
+#: The run-out cylinder of a screw end stays this far (mm) inside the screw's root radius, or
+#: the chord tolerance when that is coarser: the thread mesh's root facets sag inside the root
+#: circle by up to half its chord tolerance, and the cylinder must stay inside the thread body.
+RUN_OUT_INSET_MM = 0.01
+#: The DIN 471 ring's modelled envelope reaches this far (mm) beyond the shaft's radius (the
+#: ring's radial section above the shaft, without its lugs).
+SHAFT_RING_RIM_MM = 1.5
+#: The nut flange reaches this far (mm) inside the nut end's outside radius, so that the two
+#: overlap instead of meeting in one (differently sampled) cylinder.
+FLANGE_OVERLAP_MM = 0.5
+#: Cutters overshoot the faces they open by this much (mm), so no cut face is coplanar.
+_PAD_MM = 1.0
+
+
+@dataclass(frozen=True)
+class RingEnvelope:
+    """A purchased part modelled as its envelope, a plain ring (mm, screw frame).
+
+    ``name`` is its scene part name, ``designation`` its catalogue designation; the ring
+    spans the radii [``inner_radius_mm``, ``outer_radius_mm``] over ``z``.
+    """
+
+    name: str
+    designation: str
+    inner_radius_mm: float
+    outer_radius_mm: float
+    z: tuple[float, float]
+
+
+def purchased_envelopes(lay: ActuatorLayout) -> tuple[RingEnvelope, ...]:
+    """The envelopes of the purchased parts in scene order: the bearings (``bearing_<role>_<k>``,
+    lower end first), the KM locknut (``locknut``), the DIN 471 ring (``shaft_ring``)."""
+    out = [RingEnvelope(f"bearing_{end.role}_{k}", b.designation, 0.5 * b.size.bore_mm,
+                        0.5 * b.size.outer_diameter_mm, b.z)
+           for end in lay.ends for k, b in enumerate(end.bearings)]
+    for end in lay.ends:
+        if end.locknut is not None and end.locknut_z is not None:
+            nut = end.locknut
+            out.append(RingEnvelope("locknut", nut.designation, 0.5 * nut.thread_diameter_mm,
+                                    0.5 * nut.outer_diameter_mm, end.locknut_z))
+    for end in lay.ends:
+        if end.ring is not None and end.ring_z is not None:
+            ring = end.ring
+            out.append(RingEnvelope("shaft_ring", ring.designation, 0.5 * ring.groove_diameter_mm,
+                                    0.5 * ring.shaft_mm + SHAFT_RING_RIM_MM, end.ring_z))
+    return tuple(out)
+
+
+def actuator_part_names(lay: ActuatorLayout) -> list[str]:
+    """The actuator's scene part names in placement order: ``screw_end_lo``, ``screw_end_hi``,
+    ``nut_flange`` (a flange mounting only), the bearings, ``locknut``, ``shaft_ring``."""
+    names = ["screw_end_lo", "screw_end_hi"]
+    if lay.nut_mount.kind == "flange":
+        names.append("nut_flange")
+    return names + [env.name for env in purchased_envelopes(lay)]
+
+
+def actuator_meshes(design: PRSDesign, lay: ActuatorLayout, tol: float) -> dict[str, trimesh.Trimesh]:
+    """Meshes (mm, screw frame, the nut parts at mid-stroke) of the actuator parts, keyed by
+    the names of :func:`actuator_part_names`.
+
+    Parameters
+    ----------
+    design : PRSDesign
+        The design (screw root diameter; its mechanism layout for the nut end's radius).
+    lay : ActuatorLayout
+        Its actuator layout (:func:`~prs_geom.geometry.actuator.actuator_layout`).
+    tol : float
+        Chord tolerance (mm) of the thread meshes the screw ends meet; the actuator parts are
+        meshed at ``min(tol, MECHANISM_CHORD_MM)``, the run-out cylinder kept
+        ``max(RUN_OUT_INSET_MM, tol)`` inside the root radius.
+    """
+    from prs_geom.geometry.mechanism import layout
+
+    fine = min(tol, MECHANISM_CHORD_MM)
+    r_run_out = 0.5 * design.screw.minor_diameter_mm - max(RUN_OUT_INSET_MM, tol)
+    out = {f"screw_end_{side}": _trimesh(_screw_end(end, r_run_out, fine))
+           for side, end in zip(("lo", "hi"), lay.ends)}
+    mech = layout(design)
+    if lay.nut_mount.kind == "flange" and mech is not None:
+        out["nut_flange"] = _trimesh(_flange(lay, mech, fine))
+    envelopes = purchased_envelopes(lay)
+    # each ring turned by its own fraction of the finest polygon step: rings that touch face to
+    # face (the bearing pair, the locknut on it) then share no vertex, which a mesh file without
+    # topology (STL) would merge into edges of four faces
+    step = math.pi / (max(segments(env.outer_radius_mm, fine) for env in envelopes) * len(envelopes)) \
+        if envelopes else 0.0
+    for i, env in enumerate(envelopes):
+        out[env.name] = _trimesh(_ring(env, fine).rotate((0.0, 0.0, math.degrees(i * step))))
+    return out
+
+
+def _screw_end(end: ScrewEnd, r_run_out: float, tol: float):
+    """The manifold3d solid of one screw end: the run-out cylinder and the steps revolved as
+    one (r, z) profile, less the drive journal's keyway or flat."""
+    import manifold3d
+
+    pieces = sorted([(end.run_out[0], end.run_out[1], r_run_out)]
+                    + [(st.z[0], st.z[1], 0.5 * st.diameter_mm) for st in end.steps])
+    # up the outside in z order, then back down the axis: counter-clockwise in the (r, z) plane
+    prof = [(0.0, pieces[0][0])] + [pt for z0, z1, r in pieces for pt in ((r, z0), (r, z1))] + [(0.0, pieces[-1][1])]
+    n = segments(max(r for _, _, r in pieces), tol)
+    solid = manifold3d.CrossSection([np.asarray(prof, dtype=np.float64)]).revolve(n)
+    if end.key_z is None:
+        return solid
+    # the drive journal: the step the key span lies on
+    journal = next(st for st in end.steps if st.z[0] - 1e-9 <= end.key_z[0] and end.key_z[1] <= st.z[1] + 1e-9)
+    r_j = 0.5 * journal.diameter_mm
+    if end.key is not None:
+        return solid - _keyway_cutter(r_j, end.key.width_mm, end.key.shaft_depth_mm, end.key_z, tol)
+    assert end.flat_depth_mm is not None
+    x0 = r_j - end.flat_depth_mm
+    box = np.array([[x0, -r_j - _PAD_MM], [r_j + _PAD_MM, -r_j - _PAD_MM], [r_j + _PAD_MM, r_j + _PAD_MM],
+                    [x0, r_j + _PAD_MM]])
+    return solid - _extruded(box, [], *end.key_z)
+
+
+def _keyway_cutter(r_j: float, width: float, depth: float, span: tuple[float, float], tol: float):
+    """The DIN 6885-1 form A keyway as a solid to cut from a journal of radius ``r_j``: a
+    stadium (length the key span, width b, ends of radius b / 2; vertices on its arcs) in the
+    (z, y) plane, from the floor x = r_j - t1 out past the journal surface."""
+    a = 0.5 * width
+    half = 0.5 * (span[1] - span[0]) - a            # half the straight part
+    n = segments(a, tol)
+    t = np.pi * np.arange(n // 2 + 1) / (n // 2)
+    # u along -z (see the rotation below), v along y: right arc, then left arc
+    right = np.column_stack([half + a * np.sin(t), -a * np.cos(t)])
+    left = np.column_stack([-half - a * np.sin(t), a * np.cos(t)])
+    stadium = np.vstack([right, left])
+    height = depth + _PAD_MM
+    solid = _extruded(stadium, [], 0.0, height)
+    # (u, v, w) -> (x, y, z) = (w + r_j - t1, v, z_mid - u): a rotation (determinant +1)
+    z_mid = 0.5 * (span[0] + span[1])
+    M = np.array([[0.0, 0.0, 1.0, r_j - depth], [0.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, z_mid]])
+    return solid.transform(M)
+
+
+def _ring(env: RingEnvelope, tol: float):
+    """A plain ring: outside polygon on its circle, bore polygon tangent to its circle."""
+    return _extruded(_circle(env.outer_radius_mm, tol), [_circle(env.inner_radius_mm, tol, hole=True)], *env.z)
+
+
+def _flange(lay: ActuatorLayout, mech: MechanismLayout, tol: float):
+    """The nut flange (module doc): annulus with the bolt holes, first hole at 180 / N deg."""
+    m = lay.nut_mount
+    assert m.bolt is not None
+    count = m.bolt_count
+    r_bc = 0.5 * m.bolt_circle_diameter_mm
+    angles = math.pi / count + 2.0 * math.pi * np.arange(count) / count
+    holes = [_circle(0.5 * m.bolt.clearance_hole_mm, tol, (r_bc * math.cos(a), r_bc * math.sin(a)), hole=True)
+             for a in angles]
+    inner = _circle(mech.nut_end_outer_radius_mm - FLANGE_OVERLAP_MM, tol, hole=True)
+    return _extruded(_circle(0.5 * m.flange_diameter_mm, tol), [inner, *holes], *m.z)
