@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from cli_helpers import run, to_toml
 from prs_geom import pipeline
 from prs_geom.model.io import FIELD_COMMENTS, design_to_dict
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.design import RatingSettings, Supports, Tolerances, default_design
 
 
@@ -232,7 +233,7 @@ def test_failing_build_leaves_earlier_output_unchanged(tmp_path, monkeypatch):
     # a small design: three builds of the default one took a minute
     small = tmp_path / "small.toml"
     save_design(PRSDesign(name="small", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
-                          mesh=MeshSettings(chord_tolerance_mm=0.05)), small)
+                          mesh=MeshSettings(chord_tolerance_mm=0.05), actuator=ActuatorSettings(enabled=False)), small)
     out = tmp_path / "out"
     assert run(["build", str(small), "--out", str(out), "--quiet"])[0] == 0
     before = {p.name: p.read_bytes() for p in out.iterdir()}

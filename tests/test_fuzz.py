@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cli_helpers import run, to_toml
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.design import (GearSettings, MeshSettings, PRSDesign, RatingSettings, Roller, Supports, Thread,
                                    Tolerances)
 from prs_geom.model.io import design_to_dict, dumps_toml
@@ -27,7 +28,7 @@ from prs_geom.pipeline import load_any_design as load_design
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 TINY = PRSDesign(name="tiny", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
-                 mesh=MeshSettings(chord_tolerance_mm=0.05))
+                 mesh=MeshSettings(chord_tolerance_mm=0.05), actuator=ActuatorSettings(enabled=False))
 
 
 def _with_header(d: dict, kind: str | None = None) -> dict:

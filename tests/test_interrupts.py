@@ -18,12 +18,13 @@ from pathlib import Path
 
 import pytest
 
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
 from prs_geom.model.io import save_design
 
 #: Builds for several seconds with its checks, drawings and plots in worker processes.
 SMALL = PRSDesign(name="small", thread=Thread(engaged_teeth=6), roller=Roller(count=4),
-                  mesh=MeshSettings(chord_tolerance_mm=0.02))
+                  mesh=MeshSettings(chord_tolerance_mm=0.02), actuator=ActuatorSettings(enabled=False))
 
 
 def _group_alive(pgid: int) -> list[str]:

@@ -32,7 +32,8 @@ from prs_geom.model.io import design_to_dict
 VALUES = (math.nan, math.inf, -math.inf, 1e308, -1e308, 5e-324, 0, -1)
 COMMANDS = ("validate", "contact", "loads", "rating")
 #: The small design of the build sweep.
-SMALL = {"thread": {"engaged_teeth": 3}, "roller": {"count": 3}, "mesh": {"chord_tolerance_mm": 0.05}}
+SMALL = {"thread": {"engaged_teeth": 3}, "roller": {"count": 3}, "mesh": {"chord_tolerance_mm": 0.05},
+         "actuator": {"enabled": False}}
 #: Sections whose accepted values the default (reduced) build sweep builds, one value each:
 #: the Monte Carlo study, the gear meshes and checks, the mechanism parts and stack-up, the
 #: contact solve that sizes the theoretical screw of every mesh.

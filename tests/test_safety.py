@@ -15,13 +15,15 @@ from pathlib import Path
 import pytest
 
 from cli_helpers import run
+from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.design import MeshSettings, PRSDesign, Roller, Thread
 from prs_geom.model.io import dumps_toml, save_design
 from prs_geom.exports.output import MANIFEST_NAME, AtomicOutputDir, OutputRefused, clean_stale
 
-#: A design that builds in a few seconds (3 teeth, 3 rollers, coarse mesh).
+#: A design that builds in a few seconds (3 teeth, 3 rollers, coarse mesh, no actuator: its
+#: 100 mm stroke would make the screw the largest mesh of these file-handling tests).
 TINY = PRSDesign(name="tiny", thread=Thread(engaged_teeth=3), roller=Roller(count=3),
-                 mesh=MeshSettings(chord_tolerance_mm=0.05))
+                 mesh=MeshSettings(chord_tolerance_mm=0.05), actuator=ActuatorSettings(enabled=False))
 BUDGET = ["--memory-budget", "4G"]
 
 
