@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from prs_geom.exports.numbers import format_cell
-from prs_geom.model.actuator import ActuatorSettings
 from prs_geom.model.design import MeshSettings, PRSDesign, Roller
 from prs_geom.pipeline import build
 
@@ -143,21 +142,10 @@ def test_vendored_three_js_equals_the_npm_package():
     assert "equals the npm package" in r.stdout
 
 
-@pytest.fixture(scope="module")
-def mechanism_html(tmp_path_factory):
-    """The report of the same design without the actuator: the animation runs in Chromium's
-    software renderer, whose time grows with the scene (the actuator's made this one test
-    take 50 to 150 s); the motions are the mechanism's either way."""
-    out = tmp_path_factory.mktemp("m") / "out"
-    build(PRSDesign(name="html", roller=Roller(count=6), mesh=MeshSettings(chord_tolerance_mm=0.02),
-                    actuator=ActuatorSettings(enabled=False)), out)
-    return out / "report.html"
-
-
-def test_view_runs_the_mechanism(mechanism_html, tmp_path):
+def test_view_runs_the_mechanism(report_html, tmp_path):
     """report.html#play runs the animation: the viewer steps through the keys of the
     screw revolution without a script error."""
-    r = chromium(["--dump-dom", mechanism_html.as_uri() + "#play"], tmp_path)
+    r = chromium(["--dump-dom", report_html.as_uri() + "#play"], tmp_path)
     assert r.returncode == 0, r.stderr[-2000:]
     body = r.stdout[r.stdout.index("<body"):r.stdout.index(">", r.stdout.index("<body")) + 1]
     assert 'data-viewer="ok"' in body and "data-errors" not in body
