@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 from prs_geom.geometry.mechanism import layout
 from prs_geom.model.design import PRSDesign
@@ -411,24 +412,12 @@ def actuator_layout(design: PRSDesign) -> ActuatorLayout | None:
     """
     if not design.has_actuator:
         return None
-    return _layout_cached(design)
+    return _layout(design)
 
 
-_CACHE: dict[int, tuple[PRSDesign, ActuatorLayout]] = {}
-
-
-def _layout_cached(design: PRSDesign) -> ActuatorLayout:
-    # the layout is asked for by frames, meshing, budget and rating: compute it once per design
-    hit = _CACHE.get(id(design))
-    if hit is not None and hit[0] is design:
-        return hit[1]
-    lay = _layout(design)
-    if len(_CACHE) > 64:
-        _CACHE.clear()
-    _CACHE[id(design)] = (design, lay)
-    return lay
-
-
+# frames, meshing, the budget and the ratings all ask for it: computed once per design (a
+# design is a frozen, hashable value)
+@lru_cache(maxsize=64)
 def _layout(design: PRSDesign) -> ActuatorLayout:
     mech = layout(design)
     assert mech is not None
@@ -477,26 +466,22 @@ def _layout(design: PRSDesign) -> ActuatorLayout:
         make = _fixed_end if outward == fixed else _floating_end
         ends.append(make(design, sz, outward, z_end, run_out, d_root))
     mount = _nut_mount(design, sz, mech.ends[0].nut_end)
-    lay = ActuatorLayout(stroke_mm=S, over_travel_mm=o, nut_assembly_z=(A0, A1), thread_z=thread, full_thread_z=full,
-                         screw_run_out_mm=l_ro, thread_chamfer_mm=ch, fixed_side=fixed,
-                         ends=(ends[0], ends[1]), nut_mount=mount,
-                         supports=SupportSpans(0.0, "", 0.0, "", "", ""), sizes=dict(sz.sizes))
-    return _with_supports(lay, L)
+    shifts = (-0.5 * S, 0.5 * S)
+    return ActuatorLayout(stroke_mm=S, over_travel_mm=o, nut_assembly_z=(A0, A1), thread_z=thread,
+                          full_thread_z=full, screw_run_out_mm=l_ro, thread_chamfer_mm=ch, fixed_side=fixed,
+                          ends=(ends[0], ends[1]), nut_mount=mount,
+                          supports=support_spans((ends[0], ends[1]), fixed, shifts, L), sizes=dict(sz.sizes))
 
 
-def _with_supports(lay: ActuatorLayout, L: float) -> ActuatorLayout:
-    from dataclasses import replace
-
-    return replace(lay, supports=support_spans(lay, L))
-
-
-def support_spans(lay: ActuatorLayout, thread_length: float) -> SupportSpans:
+def support_spans(ends: tuple[ScrewEnd, ScrewEnd], fixed_side: int, shifts: tuple[float, float],
+                  thread_length: float) -> SupportSpans:
     """The screw's free lengths and end fixities from the bearing positions (module doc).
 
-    ``thread_length``: the engaged length n p (mm); the nut thread spans [s, s + n p] at
-    shift s."""
-    fixed = lay.ends[0] if lay.fixed_side < 0 else lay.ends[1]
-    other = lay.ends[1] if lay.fixed_side < 0 else lay.ends[0]
+    ``ends``: the lower and upper screw end; ``fixed_side``: -1 or +1, the fixed end's side;
+    ``shifts``: the nut's shifts (mm) at the lower and upper stroke end; ``thread_length``:
+    the engaged length n p (mm); the nut thread spans [s, s + n p] at shift s."""
+    fixed = ends[0] if fixed_side < 0 else ends[1]
+    other = ends[1] if fixed_side < 0 else ends[0]
     z_f = fixed.support_z
     assert z_f is not None
     if other.support_z is not None:
@@ -506,7 +491,7 @@ def support_spans(lay: ActuatorLayout, thread_length: float) -> SupportSpans:
         cs_len, cs_ends = abs(other.tip_z - z_f), "fixed-free"
         cs_rule = "from the middle of the fixed bearing pair to the free screw end"
     # the far end of the engaged thread at each stroke end; the worst is the farthest
-    far = [abs((s + (thread_length if lay.fixed_side < 0 else 0.0)) - z_f) for s in lay.shifts]
+    far = [abs((s + (thread_length if fixed_side < 0 else 0.0)) - z_f) for s in shifts]
     worst = int(far[1] > far[0])
     rule = (f"critical speed: {cs_rule}; buckling: from the middle of the fixed bearing pair to the far end of "
             f"the engaged thread with the nut at its {'upper' if worst else 'lower'} stroke end "
