@@ -466,19 +466,27 @@ def stage_meshes(ctx: BuildContext) -> None:
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.results.files.append(name)
     if ctx.options.step:
-        from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, write_solids, write_step
+        _write_step_files(ctx, asm)
 
-        # one file per part, named like its STL (the CAD habit: a part, a file)
-        writes = [(part, write_step(d, ctx.out / f"{part}.step", parts=(part,),
-                                    screw_profile=ctx.results.contact.screw_profile))
-                  for part in ("screw", "roller", "nut")]
-        # the carrier and the ring (when the design has them) as exact B-reps, a file each
-        writes += [(part, write_solids([mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])],
-                                       ctx.out / f"{part}.step"))
-                   for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]
-        ctx.results.step = tuple(writes)
-        ctx.results.files += step_files(ctx.results.step)
-        ctx.results.warnings += step_warnings(ctx.results.step)
+
+def _write_step_files(ctx: BuildContext, asm: Any) -> None:
+    """``<part>.step`` per made part (one file each, named like its STL: the CAD habit) and
+    ``assembly.step`` (:mod:`prs_geom.exports.step_assembly`) with every part placed."""
+    from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, step_solid, write_solids
+    from prs_geom.exports.step_assembly import ASSEMBLY_FILE, assembly_files, write_step_assembly
+
+    d = ctx.design
+    solids = [step_solid(d, part, screw_profile=ctx.results.contact.screw_profile) for part in ("screw", "roller", "nut")]
+    # the carrier and the ring (when the design has them) as exact B-reps
+    solids += [mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])
+               for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]
+    writes = [(s.part, write_solids([s], ctx.out / f"{s.part}.step")) for s in solids]
+    ctx.results.step = tuple(writes)
+    ctx.results.files += step_files(ctx.results.step)
+    ctx.results.warnings += step_warnings(ctx.results.step)
+    shapes = {s.part: s.shape for s in solids if s.valid}
+    ctx.results.step_assembly = write_step_assembly(asm.complete_parts(), shapes, ctx.out / ASSEMBLY_FILE, d.name)
+    ctx.results.files += assembly_files(ctx.results.step_assembly)
 
 
 def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn = silent) -> ChecksResult:

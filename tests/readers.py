@@ -99,3 +99,47 @@ def assert_xlsx_cell(got, want) -> None:
         assert got == pytest.approx(want, rel=1e-15, abs=1e-300)
     else:
         assert got == want
+
+
+def glb_node_transforms(path: Path) -> dict[str, np.ndarray]:
+    """World transform (4x4, mm, screw frame z up) of every named node of a GLB written by
+    prs_geom, read from the glTF JSON chunk: each node's local TRS or matrix composed down
+    the tree below the root node ``prs_geom`` (whose z-up to y-up turn is left out), metres
+    scaled to mm."""
+    import json
+    import struct
+
+    from scipy.spatial.transform import Rotation
+
+    data = Path(path).read_bytes()
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    doc = json.loads(data[20:20 + length])
+    nodes = doc["nodes"]
+
+    def local(node: dict) -> np.ndarray:
+        if "matrix" in node:
+            T = np.array(node["matrix"], dtype=np.float64).reshape(4, 4).T
+        else:
+            T = np.eye(4)
+            if "rotation" in node:
+                T[:3, :3] = Rotation.from_quat(node["rotation"]).as_matrix()
+            if "scale" in node:
+                T[:3, :3] = T[:3, :3] * np.array(node["scale"])
+            if "translation" in node:
+                T[:3, 3] = node["translation"]
+        T[:3, 3] *= 1000.0
+        return T
+
+    out: dict[str, np.ndarray] = {}
+
+    def walk(i: int, parent: np.ndarray) -> None:
+        T = parent @ local(nodes[i])
+        out[nodes[i].get("name", "")] = T
+        for c in nodes[i].get("children", []):
+            walk(c, T)
+
+    root = doc["scenes"][doc.get("scene", 0)]["nodes"]
+    for r in root:
+        for c in nodes[r].get("children", []):     # below the root's z-up to y-up turn
+            walk(c, np.eye(4))
+    return out

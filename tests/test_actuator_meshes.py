@@ -179,7 +179,7 @@ def test_flat_drive_cuts_a_circular_segment():
     lay = actuator_layout(d)
     end = lay.ends[0]
     assert end.key is None and end.flat_depth_mm == pytest.approx(1.6)
-    mesh = actuator_meshes(d, lay, TOL)["screw_end_lo"]
+    mesh = actuator_meshes(d, lay, TOL)["screw_end_lo"][0]
     r, h = 0.5 * end.steps[-1].diameter_mm, end.flat_depth_mm
     segment = r * r * math.acos((r - h) / r) - (r - h) * math.sqrt(2 * r * h - h * h)
     exact = _end_volume(end, 0.5 * d.screw.minor_diameter_mm - max(RUN_OUT_INSET_MM, TOL)) \

@@ -377,6 +377,7 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
     for part in ("screw", "roller", "nut", "carrier", "retaining_ring"):
         back = read_step(tmp_path / "out" / f"{part}.step")
         assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)
+    _check_step_assembly(tmp_path / "out", report)
     # the mechanism parts are exact B-reps: volume read back = the closed form of the true
     # circles (docs/theory/mechanism.md), which their polygon meshes approach within 0.1 %
     from prs_geom.checks.brep import shape_volume
@@ -389,6 +390,38 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         row = report["step"]["parts"][part]
         assert row["analytic_volume_mm3"] == pytest.approx(exact, rel=1e-12)
         assert abs(row["volume_mm3"] - row["mesh_volume_mm3"]) <= 1e-3 * exact
+
+
+def _check_step_assembly(out: Path, report: dict) -> None:
+    """assembly.step read back with OCP's XCAF reader: one product per distinct part, each a
+    valid B-rep; as many components of each as the parts list has pieces; every component
+    placed as the GLB node of the same name (1e-6 mm, 1e-9 rad)."""
+    from readers import glb_node_transforms
+
+    from prs_geom.exports.step_assembly import read_step_assembly, rotation_angle
+
+    back = read_step_assembly(out / "assembly.step")
+    assert back.name == report["design"]["name"]
+    section = report["step"]["assembly"]
+    assert section["file"] == "assembly.step" and section["missing"] == []
+    assert sorted(back.products) == sorted(section["products"])
+    assert all(brep_valid(shape) for shape in back.products.values())
+    counts: dict[str, int] = {}
+    for inst in back.instances:
+        counts[inst.product] = counts.get(inst.product, 0) + 1
+    # the parts list's quantities, by its part names (purchased rows without a solid, the
+    # bolts and the key, have no product)
+    rows = {row["part"]: row["quantity"] for row in report["parts_list"]}
+    names = {"screw": "screw", "roller": "roller", "nut": "nut", "carrier": "carrier",
+             "retaining_ring": "retaining ring", "bearing_fixed": "bearing, fixed end",
+             "bearing_floating": "bearing, floating end", "locknut": "locknut", "shaft_ring": "shaft ring"}
+    assert counts == {p: rows[names[p]] for p in counts}
+    assert {names[p] for p in counts} >= {r for r in rows if r not in ("flange bolt", "drive key")}
+    glb = glb_node_transforms(out / "assembly.glb")
+    for inst in back.instances:
+        T = glb[inst.name]
+        assert np.abs(inst.transform[:3, 3] - T[:3, 3]).max() <= 1e-6
+        assert rotation_angle(inst.transform[:3, :3].T @ T[:3, :3]) <= 1e-9
 
 
 def _unchecked_solid(part: str = "roller"):

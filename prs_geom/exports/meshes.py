@@ -1,17 +1,21 @@
 """Mesh exports: binary STL per part and for the assembly, the assembly as GLB and 3MF.
 
-* ``screw.stl``, ``roller.stl``, ``nut.stl``: one part each, in its part frame, mm. The
-  screw is the THEORETICAL one (pitch diameter from the contact analysis: the state the
-  analysis certifies as free of interference); ``screw_nominal.stl`` holds the nominal screw
-  when asked (``prs-geom build --screw nominal``).
-* ``assembly.stl``: the assembly in the screw frame, for a quick look; the parts of each
-  rigid body (the nut and its ring gears, each roller and its gears) united by
-  :func:`rigid_body_pieces`, so that faces touching face to face share no edges and every
-  edge of the file bounds exactly two triangles. It is a multi-body file: STL has no notion
-  of parts, so the shells arrive in one triangle list (CAD users take the GLB, 3MF or
-  per-part STLs).
-* ``assembly.glb`` (glTF 2.0, metres, +Y up) and ``assembly.3mf`` (millimetres), written by
-  :mod:`prs_geom.exports.scene`: one named node / build item per part and per roller.
+* ``screw.stl``, ``roller.stl``, ``nut.stl`` and, with the mechanism parts,
+  ``carrier.stl`` and ``retaining_ring.stl``: one complete part each
+  (:mod:`prs_geom.mesh.parts`: the screw with its ends; the roller with its gears and
+  journals; the nut with its ring gears, ends and flange), in its part frame, mm. Their
+  volumes are the parts list's. The screw is the THEORETICAL one (pitch diameter from the
+  contact analysis: the state the analysis certifies as free of interference);
+  ``screw_nominal.stl`` holds the nominal screw (with the same ends) when asked
+  (``prs-geom build --screw nominal``).
+* ``assembly.stl``: every copy of every complete part placed in the screw frame, for a quick
+  look. It is a multi-body file: STL has no notion of parts, so the shells arrive in one
+  triangle list (CAD users take the STEP assembly, the 3MF or the per-part files).
+* ``assembly.glb`` (glTF 2.0, metres, +Y up, animated): one named node per scene piece
+  (a roller's gears and journals are child nodes of its thread), written by
+  :mod:`prs_geom.exports.scene`; the node of a rigid body (``roller_3``, ``carrier_hi``)
+  places the body exactly as the STEP assembly places that copy of its part.
+* ``assembly.3mf`` (millimetres): one mesh object per complete part, one build item per copy.
 
 STL and GLB store vertex coordinates as float32: the rounding this costs is measured and
 reported (``float32_rounding_mm``, :func:`prs_geom.mesh.thread.float32_rounding`) next to the
@@ -23,14 +27,15 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom.mesh.assembly import Assembly
 
-__all__ = ["stl_records", "stl_bytes", "write_stl_pieces", "write_stl", "stl_header", "rigid_body_pieces",
-           "export_meshes"]
+__all__ = ["PART_FILES", "complete_scene", "stl_records", "stl_bytes", "write_stl_pieces", "write_stl", "stl_header",
+           "rigid_body_pieces", "export_meshes"]
 
 #: Binary STL record: normal, three vertices (float32 LE), attribute byte count.
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
@@ -95,70 +100,69 @@ def stl_header(part: str, design_hash: str, frame: str = "part frame") -> str:
 
 
 def rigid_body_pieces(asm: Assembly) -> Iterator[tuple[NDArray[np.float64], NDArray[np.int64]]]:
-    """Vertices and faces of each rigid body of the assembly, placed in the screw frame, in
-    the order of ``asm.placed``, with the parts of each rigid body united (manifold3d,
-    float64): a roller and its gears, the nut and its ring gears touch at end faces, whose
-    coincident vertices would otherwise make edges used by four faces (manifold3d may keep
-    face-touching parts as separate shells, but their boundaries no longer coincide). Bodies whose parts share one frame
-    (every roller) are united once and placed by transform."""
-    from prs_geom.mesh.thread import from_manifold, to_manifold
+    """Vertices and faces of every copy of every complete part of the assembly
+    (:meth:`Assembly.complete_parts`), placed in the screw frame: the parts of each rigid
+    body united, so that faces touching face to face share no edges and every edge of the
+    file bounds exactly two triangles."""
+    for part in asm.complete_parts().values():
+        for k in range(part.count):
+            yield part.placed_vertices(k), part.faces
 
-    bodies: dict[str, list[tuple[object, NDArray[np.float64]]]] = {}
-    for name, (mesh, T, _) in asm.placed.items():
-        bodies.setdefault(asm.rigid_body(name), []).append((mesh, T))
-    united: dict[tuple[int, ...], tuple[NDArray[np.float64], NDArray[np.int64]]] = {}
-    for body, parts in bodies.items():
-        T = parts[0][1]
-        same_frame = all(np.array_equal(Tp, T) for _, Tp in parts)
-        key = tuple(id(m) for m, _ in parts) if same_frame else (id(parts),)
-        if key not in united:
-            if len(parts) == 1:
-                united[key] = (np.asarray(parts[0][0].vertices, dtype=np.float64), np.asarray(parts[0][0].faces))
-            else:
-                solid = None
-                for m, Tp in parts:
-                    piece = to_manifold(m.vertices, m.faces)
-                    if not same_frame:
-                        piece = piece.transform(np.ascontiguousarray(Tp[:3, :4]))
-                    solid = piece if solid is None else solid + piece
-                united[key] = from_manifold(solid)
-        V, F = united[key]
-        if same_frame:
-            V = V @ T[:3, :3].T + T[:3, 3]
-        yield V, F
+
+#: The made parts with a file of their own, and how the file list describes them.
+PART_FILES = {
+    "screw": "theoretical-pitch-diameter screw, complete (thread, run-outs, ends)",
+    "roller": "roller, complete (thread, end gears, journals)",
+    "nut": "nut, complete (thread, ring gears, ends, flange)",
+    "carrier": "carrier (one of two)",
+    "retaining_ring": "retaining ring (one of two)",
+}
+
+
+def complete_scene(asm: Assembly, title: str = "") -> "Any":
+    """A flat :class:`~prs_geom.exports.scene.Scene` of the complete parts: one mesh per
+    part (its own frame), one node per copy named after its rigid body, placed by the
+    copy's transform."""
+    from prs_geom.exports.scene import MATERIALS, Scene, SceneMesh, SceneNode
+
+    meshes, nodes = {}, []
+    for part in asm.complete_parts().values():
+        family = part.name if part.name in MATERIALS else part.name.split("_")[0]
+        meshes[part.name] = SceneMesh(part.name, part.vertices, part.faces, family)
+        nodes += [SceneNode(body, part.name, part.transforms[k]) for k, body in enumerate(part.instances)]
+    mats = {k: v for k, v in MATERIALS.items() if k in {m.material for m in meshes.values()}}
+    return Scene(meshes, mats, tuple(nodes), title)
 
 
 def export_meshes(asm: Assembly, out: Path, design_hash: str, nominal_screw=None) -> dict[str, str]:
     """Write the mesh files listed in the module docstring; returns {file name: description}.
 
-    ``nominal_screw``: the nominal screw's mesh (anything with ``vertices`` and ``faces``),
-    written as ``screw_nominal.stl`` when given.
+    ``nominal_screw``: the nominal screw thread's mesh (anything with ``vertices`` and
+    ``faces``), written with the screw's ends as ``screw_nominal.stl`` when given.
     """
     from prs_geom.exports.scene import assembly_scene, write_3mf, write_glb
+    from prs_geom.mesh.parts import union_pieces
 
     files = {}
-    for name in ("screw", "roller", "nut"):
-        write_stl(asm.parts[name], out / f"{name}.stl", stl_header(name, design_hash))
-        what = "theoretical-pitch-diameter screw" if name == "screw" else name
-        files[f"{name}.stl"] = f"{what} thread, part frame, binary STL (mm)"
-    for name, label in (("carrier", "carrier"), ("retaining_ring", "retaining ring")):
-        if f"{name}_lo" in asm.placed:
-            # one piece in its own frame: the lower copy moved so that its lower face is z = 0
-            mesh = asm.placed[f"{name}_lo"][0]
-            V = np.asarray(mesh.vertices, dtype=np.float64).copy()
-            V[:, 2] -= V[:, 2].min()
-            write_stl_pieces([(V, np.asarray(mesh.faces))], out / f"{name}.stl", stl_header(name, design_hash))
-            files[f"{name}.stl"] = f"{label} (one of two), part frame (z = 0 at its face toward the nut end), binary STL (mm)"
+    complete = asm.complete_parts()
+    for name, what in PART_FILES.items():
+        if name in complete:
+            part = complete[name]
+            write_stl_pieces([(part.vertices, part.faces)], out / f"{name}.stl", stl_header(name, design_hash))
+            files[f"{name}.stl"] = f"{what}, part frame, binary STL (mm)"
     if nominal_screw is not None:
-        write_stl(nominal_screw, out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
-        files["screw_nominal.stl"] = "nominal screw thread (not the analysed state), part frame, binary STL (mm)"
+        screw = complete["screw"]
+        pieces = [(nominal_screw, np.eye(4))] + [(asm.placed[n][0], asm.placed[n][1]) for n in screw.pieces[1:]]
+        V, F, _ = union_pieces(pieces)
+        write_stl_pieces([(V, F)], out / "screw_nominal.stl", stl_header("nominal screw", design_hash))
+        files["screw_nominal.stl"] = "nominal screw, complete (not the analysed state), part frame, binary STL (mm)"
     write_stl_pieces(rigid_body_pieces(asm), out / "assembly.stl",
                      stl_header("assembly, multi-body", design_hash, "screw frame"))
-    files["assembly.stl"] = ("the assembly in the screw frame, parts of each rigid body united; multi-body "
+    files["assembly.stl"] = ("the assembly in the screw frame, every complete part placed; multi-body "
                              "binary STL (mm), for viewing")
     scene = assembly_scene(asm, asm.design.name, animate=True)
     write_glb(scene, out / "assembly.glb")
-    files["assembly.glb"] = "glTF 2.0 binary: one named node per part and roller, metres, +Y up, PBR materials"
-    write_3mf(scene, out / "assembly.3mf")
-    files["assembly.3mf"] = "3MF: one object per distinct part, one build item per placed part (mm)"
+    files["assembly.glb"] = "glTF 2.0 binary: one named node per part piece and roller, metres, +Y up, PBR materials"
+    write_3mf(complete_scene(asm, asm.design.name), out / "assembly.3mf")
+    files["assembly.3mf"] = "3MF: one object per complete part, one build item per placed copy (mm)"
     return files

@@ -703,6 +703,8 @@ class BuildResults:
     meshes: MeshStage | None = None
     #: (part, what the STEP writer returned) per STEP file of a ``--step`` build (:func:`step_section`)
     step: tuple[tuple[str, dict[str, Any]], ...] | None = None
+    #: the STEP assembly's report entry (:func:`prs_geom.exports.step_assembly.write_step_assembly`)
+    step_assembly: dict[str, Any] | None = None
     mechanism: "MechanismCheck | None" = None
     actuator: "ActuatorStage | None" = None
     kinematics: "Kinematics | None" = None
@@ -745,6 +747,7 @@ def assembly_section(results: BuildResults) -> dict[str, Any]:
         "roller_carrier_angles_deg": [float(np.degrees(a)) for a in carrier_angles(d)],
         "roller_spin_deg": [float(np.degrees(roller_spin(d, a)) % 360.0) for a in carrier_angles(d)],
         "triangles": int(sum(m.faces.shape[0] for m, _, _ in asm.placed.values())),
+        "complete_parts": [part.report() for part in asm.complete_parts().values()],
     }
 
 
@@ -802,6 +805,8 @@ def _stage_sections(results: BuildResults) -> dict[str, Any]:
         out["assembly"] = assembly_section(results)
     if results.step is not None:
         out["step"] = step_section(results.step)
+        if results.step_assembly is not None:
+            out["step"]["assembly"] = results.step_assembly
     if results.mechanism is not None:
         out["mechanism"] = mechanism_section(results.mechanism)
     if results.actuator is not None:

@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.thread import ThreadMesh
     from prs_geom.model.design import PRSDesign
 
-__all__ = ["AUTHORITY_NOTE", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA",
+__all__ = ["AUTHORITY_NOTE", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document",
            "StepFileContent", "StepSolid", "mechanism_step_solid", "read_step", "require_ocp", "step_solid",
            "write_solids", "write_step"]
 
@@ -476,6 +476,31 @@ def _new_document():
     return doc
 
 
+def read_document(path: str | os.PathLike) -> tuple[Any, Any, Any]:
+    """Read a STEP file into a new XCAF document: (reader, document, shape tool), names
+    kept, OpenCascade's transfer messages silenced.
+
+    Raises
+    ------
+    EnvironmentFailure
+        OCP missing, or the file cannot be read as STEP.
+    """
+    require_ocp()
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.STEPCAFControl import STEPCAFControl_Reader
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+    reader = STEPCAFControl_Reader()
+    reader.SetNameMode(True)
+    with _quiet_occ():
+        if reader.ReadFile(str(path)) != IFSelect_RetDone:
+            raise EnvironmentFailure(f"cannot read {path} as a STEP file")
+        doc = _new_document()
+        if not reader.Transfer(doc):
+            raise EnvironmentFailure(f"cannot transfer the shapes of {path}")
+    return reader, doc, XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+
+
 def read_step(path: str | os.PathLike) -> StepFileContent:
     """Read a STEP file with its part names (XCAF) and header.
 
@@ -494,22 +519,11 @@ def read_step(path: str | os.PathLike) -> StepFileContent:
     EnvironmentFailure
         OCP missing, or the file cannot be read as STEP.
     """
-    require_ocp()
     from OCP.collections import Sequence_TDF_Label
-    from OCP.IFSelect import IFSelect_RetDone
-    from OCP.STEPCAFControl import STEPCAFControl_Reader
     from OCP.TDataStd import TDataStd_Name
-    from OCP.XCAFDoc import XCAFDoc_DocumentTool, XCAFDoc_ShapeTool
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
 
-    reader = STEPCAFControl_Reader()
-    reader.SetNameMode(True)
-    with _quiet_occ():
-        if reader.ReadFile(str(path)) != IFSelect_RetDone:
-            raise EnvironmentFailure(f"cannot read {path} as a STEP file")
-        doc = _new_document()
-        if not reader.Transfer(doc):
-            raise EnvironmentFailure(f"cannot transfer the shapes of {path}")
-    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    reader, doc, tool = read_document(path)
     labels = Sequence_TDF_Label()
     tool.GetFreeShapes(labels)
     names, shapes = [], []

@@ -103,9 +103,15 @@ def actuator_part_names(lay: ActuatorLayout) -> list[str]:
     return names + [env.name for env in purchased_envelopes(lay)]
 
 
-def actuator_meshes(design: PRSDesign, lay: ActuatorLayout, tol: float) -> dict[str, trimesh.Trimesh]:
-    """Meshes (mm, screw frame, the nut parts at mid-stroke) of the actuator parts, keyed by
-    the names of :func:`actuator_part_names`.
+def actuator_meshes(design: PRSDesign, lay: ActuatorLayout,
+                    tol: float) -> dict[str, tuple[trimesh.Trimesh, np.ndarray]]:
+    """Meshes (mm) of the actuator parts, keyed by the names of :func:`actuator_part_names`,
+    each as (mesh in its own frame, 4x4 transform to the screw frame with the nut parts at
+    mid-stroke).
+
+    The screw ends and the flange are meshed in place (transform the identity). A purchased
+    part is meshed once per size in its own frame (axis z, z = 0 at its lower face) and
+    placed by a transform: the two bearings of the fixed end are two copies of one mesh.
 
     Parameters
     ----------
@@ -119,22 +125,33 @@ def actuator_meshes(design: PRSDesign, lay: ActuatorLayout, tol: float) -> dict[
         ``max(RUN_OUT_INSET_MM, tol)`` inside the root radius.
     """
     from prs_geom.geometry.mechanism import layout
+    from prs_geom.mesh.mechanism import translation
 
+    I = np.eye(4)
     fine = min(tol, MECHANISM_CHORD_MM)
     r_run_out = 0.5 * design.screw.minor_diameter_mm - max(RUN_OUT_INSET_MM, tol)
-    out = {f"screw_end_{side}": _trimesh(_screw_end(end, r_run_out, fine))
+    out = {f"screw_end_{side}": (_trimesh(_screw_end(end, r_run_out, fine)), I)
            for side, end in zip(("lo", "hi"), lay.ends)}
     mech = layout(design)
     if lay.nut_mount.kind == "flange" and mech is not None:
-        out["nut_flange"] = _trimesh(_flange(lay, mech, fine))
+        out["nut_flange"] = (_trimesh(_flange(lay, mech, fine)), I)
     envelopes = purchased_envelopes(lay)
     # each ring turned by its own fraction of the finest polygon step: rings that touch face to
     # face (the bearing pair, the locknut on it) then share no vertex, which a mesh file without
     # topology (STL) would merge into edges of four faces
     step = math.pi / (max(segments(env.outer_radius_mm, fine) for env in envelopes) * len(envelopes)) \
         if envelopes else 0.0
+    shared: dict[tuple[str, float, float, float], trimesh.Trimesh] = {}
     for i, env in enumerate(envelopes):
-        out[env.name] = _trimesh(_ring(env, fine).rotate((0.0, 0.0, math.degrees(i * step))))
+        width = env.z[1] - env.z[0]
+        key = (env.designation, env.inner_radius_mm, env.outer_radius_mm, width)
+        if key not in shared:
+            shared[key] = _trimesh(_ring(RingEnvelope(env.name, env.designation, env.inner_radius_mm,
+                                                      env.outer_radius_mm, (0.0, width)), fine))
+        angle = i * step
+        T = translation(env.z[0])
+        T[:2, :2] = [[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]]
+        out[env.name] = (shared[key], T)
     return out
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -172,6 +173,16 @@ class Assembly:
     tolerance: float = 0.0
     #: scene part name -> (mesh in its own frame, 4x4 transform to the screw frame, kind)
     placed: dict[str, tuple[trimesh.Trimesh, NDArray[np.float64], str]] = field(default_factory=dict)
+    _complete: dict[str, Any] | None = field(default=None, init=False, repr=False, compare=False)
+
+    def complete_parts(self) -> dict[str, Any]:
+        """The complete parts (:func:`prs_geom.mesh.parts.complete_parts`), formed on the
+        first call and kept: every export and check of a build uses the same unions."""
+        if self._complete is None:
+            from prs_geom.mesh.parts import complete_parts
+
+            self._complete = complete_parts(self)
+        return self._complete
 
     def scene(self) -> trimesh.Scene:
         sc = trimesh.Scene()
@@ -292,11 +303,12 @@ def scene_names(design: PRSDesign, gears: bool, mechanism: bool = False) -> list
     return [entry[0] for entry in _scene_entries(design, gears, mechanism)]
 
 
-def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh] | None:
+def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, tuple[trimesh.Trimesh, NDArray[np.float64]]] | None:
     """Meshes of the carriers, journals, retaining rings and nut ends
     (:func:`prs_geom.mesh.mechanism.mechanism_meshes`) and, for an actuator, of its parts
-    (:func:`prs_geom.mesh.actuator.actuator_meshes`, screw frame at mid-stroke); None when the
-    design has no mechanism."""
+    (:func:`prs_geom.mesh.actuator.actuator_meshes`, screw frame at mid-stroke), each as (mesh
+    in its own frame, transform to the screw frame, or to the roller frame for a journal);
+    None when the design has no mechanism."""
     from prs_geom.geometry.mechanism import layout
 
     lay = layout(design)
@@ -315,25 +327,29 @@ def mechanism_parts(design: PRSDesign, tol: float) -> dict[str, trimesh.Trimesh]
 
 def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progress: ProgressFn = silent,
            gear_window: tuple[float, float] | None = None,
-           mech_parts: dict[str, trimesh.Trimesh] | None = None) -> None:
+           mech_parts: dict[str, tuple[trimesh.Trimesh, NDArray[np.float64]]] | None = None) -> None:
     """Place ``asm.parts``, the gears and the mechanism parts in ``asm.placed``, in the order
-    of :func:`scene_names`; with ``gear_window``, only the gears and mechanism parts whose z
-    range (the same in the part frames and the screw frame) meets it."""
+    of :func:`scene_names`; with ``gear_window``, only the gears and mechanism parts whose
+    placed z range (the same in the roller frames and the screw frame) meets it."""
     design = asm.design
-    tables = {"parts": {name: tm.to_trimesh() for name, tm in asm.parts.items()},
-              "gears": gear_parts or {}, "mechanism": mech_parts or {}}
-    transforms = {k: roller_transform(design, k) for k in range(design.roller.count)}
     I = np.eye(4)
+    tables: dict[str, dict[str, tuple[trimesh.Trimesh, NDArray[np.float64]]]] = {
+        "parts": {name: (tm.to_trimesh(), I) for name, tm in asm.parts.items()},
+        "gears": {name: (mesh, I) for name, mesh in (gear_parts or {}).items()},
+        "mechanism": mech_parts or {}}
+    transforms = {k: roller_transform(design, k) for k in range(design.roller.count)}
     z = design.roller.count
     for name, table, key, k, kind in _scene_entries(design, gear_parts is not None, mech_parts is not None):
-        mesh = tables[table].get(key)
-        if mesh is None:
+        entry = tables[table].get(key)
+        if entry is None:
             continue
+        mesh, T_own = entry
         if table != "parts" and gear_window is not None:
-            zs = np.asarray(mesh.vertices)[:, 2]
+            zs = np.asarray(mesh.vertices) @ T_own[2, :3] + T_own[2, 3]
             if not (zs.max() > gear_window[0] and zs.min() < gear_window[1]):
                 continue
-        asm.placed[name] = (mesh, I if k is None else transforms[k], kind)
+        T = T_own if k is None else (transforms[k] if np.array_equal(T_own, I) else transforms[k] @ T_own)
+        asm.placed[name] = (mesh, T, kind)
         if table == "parts" and key == "roller":
             progress("placing rollers", k + 1, z)
 
@@ -357,7 +373,7 @@ def window_assembly(design: PRSDesign, tol: float, z_window: tuple[float, float]
                     screw_profile: ThreadProfile | None = None,
                     gear_parts: dict[str, trimesh.Trimesh] | None = None,
                     reuse: Assembly | None = None,
-                    mech_parts: dict[str, trimesh.Trimesh] | None = None) -> Assembly:
+                    mech_parts: dict[str, tuple[trimesh.Trimesh, NDArray[np.float64]]] | None = None) -> Assembly:
     """The assembly's piece between the planes z = ``z_window`` (screw frame, mm): every
     thread part meshed over that window only (:func:`build_part`), and the gears of
     ``gear_parts`` (:func:`end_gears`) and mechanism parts of ``mech_parts``

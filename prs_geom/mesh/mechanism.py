@@ -22,7 +22,7 @@ from prs_geom.geometry.mechanism import RING_GAP_RAD, MechanismLayout
 from prs_geom.mesh.thread import from_manifold
 from prs_geom.model.design import PRSDesign
 
-__all__ = ["MECHANISM_CHORD_MM", "mechanism_meshes", "segments"]
+__all__ = ["MECHANISM_CHORD_MM", "mechanism_meshes", "segments", "translation"]
 
 #: The mechanism parts are never meshed coarser than this (mm).
 MECHANISM_CHORD_MM = 1e-3
@@ -70,11 +70,27 @@ def _prism(outer: NDArray, holes: list[NDArray], z0: float, z1: float) -> "trime
     return _trimesh(_extruded(outer, holes, z0, z1))
 
 
-def mechanism_meshes(design: PRSDesign, lay: MechanismLayout, tol: float) -> dict[str, "trimesh.Trimesh"]:
+def translation(z: float) -> NDArray[np.float64]:
+    """The 4x4 transform that moves a part by ``z`` (mm) along the axis."""
+    T = np.eye(4)
+    T[2, 3] = z
+    return T
+
+
+def mechanism_meshes(design: PRSDesign, lay: MechanismLayout,
+                     tol: float) -> dict[str, tuple["trimesh.Trimesh", NDArray[np.float64]]]:
     """Meshes (mm) keyed ``journal_lo/hi`` (roller frame), ``carrier_lo/hi``,
-    ``retaining_ring_lo/hi`` and ``nut_end_lo/hi`` (screw frame = nut frame at assembly)."""
+    ``retaining_ring_lo/hi`` and ``nut_end_lo/hi``, each as (mesh in its own frame, 4x4
+    transform from that frame to the roller frame for a journal, to the screw frame (= the
+    nut frame at assembly) for the others).
+
+    The two carriers are one mesh, and so are the two retaining rings (both prisms of one
+    outline): in the part's own frame (z = 0 at its lower face), moved to each end by a
+    translation, so that an exported assembly places two copies of one part. The journals
+    and nut ends are meshed in place (transform the identity)."""
     tol = min(tol, MECHANISM_CHORD_MM)
-    out: dict[str, trimesh.Trimesh] = {}
+    I = np.eye(4)
+    out: dict[str, tuple[trimesh.Trimesh, NDArray[np.float64]]] = {}
     r_j = 0.5 * lay.journal_fit.shaft_diameter_mm
     r_b = 0.5 * lay.journal_fit.hole_diameter_mm
     a = lay.centre_distance_mm
@@ -86,11 +102,14 @@ def mechanism_meshes(design: PRSDesign, lay: MechanismLayout, tol: float) -> dic
     half = 0.5 * RING_GAP_RAD
     ring = np.vstack([_arc(lay.ring_outer_radius_mm, tol, half, 2.0 * math.pi - half),
                       _arc(lay.ring_inner_radius_mm, tol, half, 2.0 * math.pi - half)[::-1]])
+    lo = lay.ends[0]
+    carrier_mesh = _prism(*carrier, 0.0, lo.carrier[1] - lo.carrier[0])
+    ring_mesh = _prism(ring, [], 0.0, lo.ring[1] - lo.ring[0])
     for side, end in zip(("lo", "hi"), lay.ends):
-        out[f"journal_{side}"] = _prism(journal, [], *end.journal)
-        out[f"carrier_{side}"] = _prism(*carrier, *end.carrier)
-        out[f"retaining_ring_{side}"] = _prism(ring, [], *end.ring)
-        out[f"nut_end_{side}"] = _nut_end(lay, end, tol)
+        out[f"journal_{side}"] = (_prism(journal, [], *end.journal), I)
+        out[f"carrier_{side}"] = (carrier_mesh, translation(end.carrier[0]))
+        out[f"retaining_ring_{side}"] = (ring_mesh, translation(end.ring[0]))
+        out[f"nut_end_{side}"] = (_nut_end(lay, end, tol), I)
     return out
 
 

@@ -105,4 +105,4 @@ def mechanism_part_mesh(design: "PRSDesign", part: str) -> Any:
     from prs_geom.geometry.mechanism import layout
     from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, mechanism_meshes
 
-    return mechanism_meshes(design, layout(design), MECHANISM_CHORD_MM)[f"{part}_lo"]
+    return mechanism_meshes(design, layout(design), MECHANISM_CHORD_MM)[f"{part}_lo"][0]

@@ -1,0 +1,311 @@
+"""The STEP assembly (``assembly.step``, optional extra ``step``): one product per distinct
+part, placed once per copy, with names and colours.
+
+The structure is that of the complete parts (:mod:`prs_geom.mesh.parts`): a product per
+part (``screw``, ``roller``, ``nut``, ``carrier``, ``retaining_ring``, and the envelopes of
+the purchased parts), its shape in the part's own frame, and one component per copy named
+after its rigid body (``roller_0`` ... ``roller_<z-1>``, ``carrier_lo``, ``carrier_hi``),
+placed by the copy's transform: the same transform as the GLB node of that name and the 3MF
+build item, so a CAD user gets the assembly as the analysis placed it, at mid-stroke (the
+nut's frame on the screw frame; ``stroke_position_mm`` 0 in the report, measured from the
+middle of the stroke).
+
+Shapes: the per-part B-rep solids of :mod:`prs_geom.exports.step` (the thread bodies, the
+exact carrier and retaining ring) and, for a purchased part, its envelope as an exact ring
+(OpenCascade primitives). The product's colour is the part's display colour of the GLB
+(:data:`prs_geom.exports.scene.MATERIALS`, converted to sRGB). XCAF writes the file (AP214,
+product structure with NEXT_ASSEMBLY_USAGE_OCCURRENCE and item-defined transformations) and
+reads it back (:func:`read_step_assembly`) before it is moved into place.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from prs_geom.exports.step import AUTHORITY_NOTE, STEP_SCHEMA, _new_document, _quiet_occ, require_ocp
+from prs_geom.model.errors import EnvironmentFailure
+from prs_geom.model.io import atomic_path
+
+if TYPE_CHECKING:  # pragma: no cover
+    from prs_geom.mesh.parts import CompletePart
+
+__all__ = ["ASSEMBLY_FILE", "assembly_files", "placement_problems", "rotation_angle", "StepAssemblyContent", "StepInstance", "envelope_shape", "read_step_assembly",
+           "write_step_assembly"]
+
+#: The assembly file's name.
+ASSEMBLY_FILE = "assembly.step"
+#: Placements read back may differ from the written ones by no more than this (mm and rad).
+PLACEMENT_TOLERANCE = (1e-6, 1e-9)
+
+
+@dataclass(frozen=True)
+class StepInstance:
+    """One placed copy read back: its name, its product's name and its 4x4 placement (mm)."""
+
+    name: str
+    product: str
+    transform: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class StepAssemblyContent:
+    """What an assembly STEP file holds, read back through XCAF.
+
+    Attributes
+    ----------
+    name : str
+        The root assembly's name.
+    products : dict of str to TopoDS_Shape
+        Each distinct product's shape by name (in its own frame).
+    instances : tuple of StepInstance
+        Every component of the root assembly, in file order.
+    description : tuple of str
+        The FILE_DESCRIPTION strings of the header.
+    """
+
+    name: str
+    products: dict[str, Any]
+    instances: tuple[StepInstance, ...]
+    description: tuple[str, ...]
+
+
+def _trsf(T: NDArray[np.float64]):
+    from OCP.gp import gp_Trsf
+
+    t = gp_Trsf()
+    t.SetValues(*(float(x) for x in np.asarray(T, dtype=np.float64)[:3, :4].ravel()))
+    return t
+
+
+def _matrix(trsf) -> NDArray[np.float64]:
+    T = np.eye(4)
+    for i in range(3):
+        for j in range(4):
+            T[i, j] = trsf.Value(i + 1, j + 1)
+    return T
+
+
+def envelope_shape(part: "CompletePart") -> Any:
+    """A purchased part's envelope as an exact B-rep ring: the outer and inner radius and
+    the height of its mesh's bounding cylinder (part frame, z = 0 at its lower face)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    V = part.vertices
+    r = np.hypot(V[:, 0], V[:, 1])
+    z0, z1 = float(V[:, 2].min()), float(V[:, 2].max())
+    # the outside's polygon vertices lie on its circle; the bore's edges are tangent to its
+    # circle, so the bore's radius is the smallest vertex radius times cos(pi / n)
+    outer = float(r.max())
+    n_inner = int(np.count_nonzero(np.isclose(r, r.min(), rtol=1e-9, atol=0.0)) // 2) or 1
+    inner = float(r.min()) * math.cos(math.pi / max(n_inner, 3))
+    ax = gp_Ax2(gp_Pnt(0.0, 0.0, z0), gp_Dir(0.0, 0.0, 1.0))
+    body = BRepPrimAPI_MakeCylinder(ax, outer, z1 - z0).Shape()
+    bore = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0 - 1.0), gp_Dir(0.0, 0.0, 1.0)), inner, z1 - z0 + 2.0)
+    op = BRepAlgoAPI_Cut(body, bore.Shape())
+    op.Build()
+    return op.Shape()
+
+
+def _shape_kind(part: "CompletePart", shapes: Mapping[str, Any], thread_bodies: tuple[str, ...]) -> str:
+    if part.name not in shapes:
+        return "envelope"
+    return "thread body" if part.name in thread_bodies else "solid"
+
+
+def _srgb(colour: tuple[float, float, float, float]) -> tuple[float, float, float]:
+    def enc(c: float) -> float:
+        return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+    return tuple(min(max(enc(c), 0.0), 1.0) for c in colour[:3])  # type: ignore[return-value]
+
+
+def _write(path: str, title: str, parts: list[tuple["CompletePart", Any]], target: Path) -> None:
+    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.Interface import Interface_Static
+    from OCP.Quantity import Quantity_Color, Quantity_TOC_sRGB
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPControl import STEPControl_AsIs
+    from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_DocumentTool
+
+    from prs_geom._version import __version__
+    from prs_geom.exports.scene import MATERIALS
+
+    doc = _new_document()
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
+    root = tool.NewShape()
+    TDataStd_Name.Set_s(root, TCollection_ExtendedString(title))
+    for part, shape in parts:
+        label = tool.AddShape(shape, False)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(part.name))
+        family = part.name if part.name in MATERIALS else part.name.split("_")[0]
+        r, g, b = _srgb(MATERIALS[family].colour)
+        colours.SetColor(label, Quantity_Color(r, g, b, Quantity_TOC_sRGB), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
+        for k, body in enumerate(part.instances):
+            comp = tool.AddComponent(root, label, TopLoc_Location(_trsf(part.transforms[k])))
+            TDataStd_Name.Set_s(comp, TCollection_ExtendedString(body))
+    tool.UpdateAssemblies()
+    previous = Interface_Static.CVal_s("write.step.schema")
+    Interface_Static.SetCVal_s("write.step.schema", STEP_SCHEMA)
+    try:
+        with _quiet_occ():
+            writer = STEPCAFControl_Writer()
+            writer.SetNameMode(True)
+            writer.SetColorMode(True)
+            if not writer.Transfer(doc, STEPControl_AsIs):
+                raise RuntimeError("the STEP writer refused the assembly")
+            header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
+            header.SetName(TCollection_HAsciiString(target.name))
+            header.SetDescriptionValue(1, TCollection_HAsciiString(AUTHORITY_NOTE))
+            header.SetOriginatingSystem(TCollection_HAsciiString(f"prs-geom {__version__}"))
+            if writer.Write(path) != IFSelect_RetDone:
+                raise EnvironmentFailure(f"cannot write {target}: the STEP writer failed")
+    finally:
+        Interface_Static.SetCVal_s("write.step.schema", previous)
+
+
+def _name(label) -> str:
+    from OCP.TDataStd import TDataStd_Name
+
+    attr = TDataStd_Name()
+    return attr.Get().ToExtString() if label.FindAttribute(TDataStd_Name.GetID_s(), attr) else ""
+
+
+def read_step_assembly(path: str | os.PathLike) -> StepAssemblyContent:
+    """Read an assembly STEP file with XCAF: its products, components and placements.
+
+    Raises
+    ------
+    EnvironmentFailure
+        OCP missing, or the file cannot be read as STEP, or it holds no assembly.
+    """
+    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+    from OCP.collections import Sequence_TDF_Label as TDF_LabelSequence
+    from OCP.TDF import TDF_Label
+    from OCP.XCAFDoc import XCAFDoc_ShapeTool
+
+    from prs_geom.exports.step import read_document
+
+    reader, _, tool = read_document(path)
+    free = TDF_LabelSequence()
+    tool.GetFreeShapes(free)
+    roots = [free.Value(i) for i in range(1, free.Length() + 1) if XCAFDoc_ShapeTool.IsAssembly_s(free.Value(i))]
+    if len(roots) != 1:
+        raise EnvironmentFailure(f"{path} holds {len(roots)} root assemblies, not one")
+    root = roots[0]
+    comps = TDF_LabelSequence()
+    XCAFDoc_ShapeTool.GetComponents_s(root, comps, False)
+    products: dict[str, Any] = {}
+    instances = []
+    for i in range(1, comps.Length() + 1):
+        comp = comps.Value(i)
+        ref = TDF_Label()
+        XCAFDoc_ShapeTool.GetReferredShape_s(comp, ref)
+        product = _name(ref)
+        products.setdefault(product, XCAFDoc_ShapeTool.GetShape_s(ref))
+        loc = XCAFDoc_ShapeTool.GetLocation_s(comp)
+        instances.append(StepInstance(_name(comp), product, _matrix(loc.Transformation())))
+    header = APIHeaderSection_MakeHeader(reader.Reader().StepModel())
+    description = tuple(header.DescriptionValue(k).ToCString() for k in range(1, header.NbDescription() + 1))
+    return StepAssemblyContent(name=_name(root), products=products, instances=tuple(instances),
+                               description=description)
+
+
+def write_step_assembly(parts: Mapping[str, "CompletePart"], shapes: Mapping[str, Any], path: str | os.PathLike,
+                        title: str, thread_bodies: tuple[str, ...] = ("screw", "roller", "nut")) -> dict[str, Any]:
+    """Write the assembly of ``parts`` (:meth:`prs_geom.mesh.assembly.Assembly.complete_parts`)
+    with the product shapes ``shapes`` (by part name; a purchased part without one gets its
+    envelope, :func:`envelope_shape`; a made part without one is left out and listed), read
+    it back and check every product and placement; only then move it into place. The parts
+    named in ``thread_bodies`` are reported as such (``shape`` "thread body"): their shape is
+    the thread's B-rep without the gears, journals, ends and flange of the complete part.
+
+    Returns
+    -------
+    dict
+        The report entry ``step.assembly``: ``file`` (None when the read-back check failed,
+        see ``problems``), ``products`` (name -> {instances, shape}), ``missing`` (made parts
+        without a solid), ``stroke_position_mm`` (0: mid-stroke), ``placement_max_diff_mm``
+        and ``placement_max_diff_rad`` (largest difference read back).
+    """
+    require_ocp()
+    path = Path(path)
+    chosen: list[tuple[CompletePart, Any]] = []
+    missing = []
+    for name, part in parts.items():
+        shape = shapes.get(name)
+        if shape is None and part.purchased:
+            shape = envelope_shape(part)
+        if shape is None:
+            missing.append(name)
+            continue
+        chosen.append((part, shape))
+    section: dict[str, Any] = {
+        "file": None, "stroke_position_mm": 0.0, "missing": missing,
+        "products": {p.name: {"instances": list(p.instances), "shape": _shape_kind(p, shapes, thread_bodies)}
+                     for p, _ in chosen},
+        "placement_max_diff_mm": None, "placement_max_diff_rad": None,
+    }
+    try:
+        with atomic_path(path) as tmp:
+            _write(str(tmp), title, chosen, path)
+            back = read_step_assembly(tmp)
+            problems, dmm, drad = placement_problems(chosen, back)
+            section["placement_max_diff_mm"], section["placement_max_diff_rad"] = dmm, drad
+            if problems:
+                section["problems"] = problems
+                raise _Rejected()
+    except _Rejected:
+        return section
+    section["file"] = path.name
+    return section
+
+
+def assembly_files(section: Mapping[str, Any] | None) -> list[str]:
+    """The file the assembly entry says was written (none when the check failed)."""
+    return [section["file"]] if section is not None and section["file"] else []
+
+
+def rotation_angle(R: NDArray[np.float64]) -> float:
+    """The angle (rad) of a rotation matrix, accurate near zero (atan2 of the sine from the
+    skew part and the cosine from the trace; arccos of the trace alone loses half the digits
+    there)."""
+    skew = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return float(math.atan2(0.5 * np.linalg.norm(skew), 0.5 * (np.trace(R) - 1.0)))
+
+
+class _Rejected(Exception):
+    pass
+
+
+def placement_problems(chosen: list[tuple["CompletePart", Any]], back: StepAssemblyContent) -> tuple[list[str], float, float]:
+    """What the read-back assembly gets wrong: a product or copy missing or misplaced beyond
+    :data:`PLACEMENT_TOLERANCE`; and the largest placement differences (mm, rad)."""
+    problems = []
+    by_name = {inst.name: inst for inst in back.instances}
+    dmm = drad = 0.0
+    for part, _ in chosen:
+        if part.name not in back.products:
+            problems.append(f"product {part.name} is not in the file")
+        for k, body in enumerate(part.instances):
+            inst = by_name.get(body)
+            if inst is None or inst.product != part.name:
+                problems.append(f"copy {body} of {part.name} is not in the file")
+                continue
+            T = part.transforms[k]
+            dmm = max(dmm, float(np.abs(inst.transform[:3, 3] - T[:3, 3]).max()))
+            drad = max(drad, rotation_angle(inst.transform[:3, :3].T @ T[:3, :3]))
+    if dmm > PLACEMENT_TOLERANCE[0] or drad > PLACEMENT_TOLERANCE[1]:
+        problems.append(f"placements read back differ by {dmm:.3g} mm and {drad:.3g} rad")
+    return problems, dmm, drad
