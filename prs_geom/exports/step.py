@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.thread import ThreadMesh
     from prs_geom.model.design import PRSDesign
 
-__all__ = ["AUTHORITY_NOTE", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document",
+__all__ = ["AUTHORITY_NOTE", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
            "StepFileContent", "StepSolid", "mechanism_step_solid", "read_step", "require_ocp", "step_solid",
            "write_solids", "write_step"]
 
@@ -541,25 +541,18 @@ def read_step(path: str | os.PathLike) -> StepFileContent:
     return StepFileContent(names=tuple(names), shapes=tuple(shapes), schema=schema, description=description)
 
 
-def _write_file(path: str, solids: Sequence[StepSolid], target: Path) -> None:
-    """One STEP AP214 file: each solid a free shape named after its part (XCAF label name ->
-    PRODUCT name), the authority note in FILE_DESCRIPTION."""
+def write_document(doc: Any, path: str, target: Path, colours: bool = False) -> None:
+    """Write an XCAF document as one STEP AP214 file at ``path`` (names kept, colours with
+    ``colours``), its header naming ``target`` and carrying :data:`AUTHORITY_NOTE`."""
     from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
     from OCP.IFSelect import IFSelect_RetDone
     from OCP.Interface import Interface_Static
     from OCP.STEPCAFControl import STEPCAFControl_Writer
     from OCP.STEPControl import STEPControl_AsIs
-    from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
-    from OCP.TDataStd import TDataStd_Name
-    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+    from OCP.TCollection import TCollection_HAsciiString
 
     from prs_geom._version import __version__
 
-    doc = _new_document()
-    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
-    for s in solids:
-        label = tool.AddShape(s.shape, False)
-        TDataStd_Name.Set_s(label, TCollection_ExtendedString(s.part))
     # the schema is a process-wide setting read when the writer makes its model: set it for
     # this file only and put the previous value back
     previous = Interface_Static.CVal_s("write.step.schema")
@@ -568,6 +561,7 @@ def _write_file(path: str, solids: Sequence[StepSolid], target: Path) -> None:
         with _quiet_occ():
             writer = STEPCAFControl_Writer()
             writer.SetNameMode(True)
+            writer.SetColorMode(colours)
             if not writer.Transfer(doc, STEPControl_AsIs):
                 raise RuntimeError("the STEP writer refused the shapes")
             # the header exists once the shapes are transferred; MakeHeader edits it in place
@@ -580,6 +574,21 @@ def _write_file(path: str, solids: Sequence[StepSolid], target: Path) -> None:
                                          "exist and is it writable?)")
     finally:
         Interface_Static.SetCVal_s("write.step.schema", previous)
+
+
+def _write_file(path: str, solids: Sequence[StepSolid], target: Path) -> None:
+    """One STEP AP214 file: each solid a free shape named after its part (XCAF label name ->
+    PRODUCT name), the authority note in FILE_DESCRIPTION."""
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+
+    doc = _new_document()
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    for s in solids:
+        label = tool.AddShape(s.shape, False)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(s.part))
+    write_document(doc, path, target)
 
 
 def write_step(design: "PRSDesign", path: str | os.PathLike, parts: Sequence[str] = PARTS,

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 from numpy.typing import NDArray
 
-from prs_geom.exports.step import AUTHORITY_NOTE, STEP_SCHEMA, _new_document, _quiet_occ, require_ocp
+from prs_geom.exports.step import _new_document, require_ocp
 from prs_geom.model.errors import EnvironmentFailure
 from prs_geom.model.io import atomic_path
 
@@ -127,19 +127,14 @@ def _srgb(colour: tuple[float, float, float, float]) -> tuple[float, float, floa
 
 
 def _write(path: str, title: str, parts: list[tuple["CompletePart", Any]], target: Path) -> None:
-    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
-    from OCP.IFSelect import IFSelect_RetDone
-    from OCP.Interface import Interface_Static
     from OCP.Quantity import Quantity_Color, Quantity_TOC_sRGB
-    from OCP.STEPCAFControl import STEPCAFControl_Writer
-    from OCP.STEPControl import STEPControl_AsIs
-    from OCP.TCollection import TCollection_ExtendedString, TCollection_HAsciiString
+    from OCP.TCollection import TCollection_ExtendedString
     from OCP.TDataStd import TDataStd_Name
     from OCP.TopLoc import TopLoc_Location
     from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_DocumentTool
 
-    from prs_geom._version import __version__
     from prs_geom.exports.scene import MATERIALS
+    from prs_geom.exports.step import write_document
 
     doc = _new_document()
     tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
@@ -156,23 +151,7 @@ def _write(path: str, title: str, parts: list[tuple["CompletePart", Any]], targe
             comp = tool.AddComponent(root, label, TopLoc_Location(_trsf(part.transforms[k])))
             TDataStd_Name.Set_s(comp, TCollection_ExtendedString(body))
     tool.UpdateAssemblies()
-    previous = Interface_Static.CVal_s("write.step.schema")
-    Interface_Static.SetCVal_s("write.step.schema", STEP_SCHEMA)
-    try:
-        with _quiet_occ():
-            writer = STEPCAFControl_Writer()
-            writer.SetNameMode(True)
-            writer.SetColorMode(True)
-            if not writer.Transfer(doc, STEPControl_AsIs):
-                raise RuntimeError("the STEP writer refused the assembly")
-            header = APIHeaderSection_MakeHeader(writer.ChangeWriter().Model())
-            header.SetName(TCollection_HAsciiString(target.name))
-            header.SetDescriptionValue(1, TCollection_HAsciiString(AUTHORITY_NOTE))
-            header.SetOriginatingSystem(TCollection_HAsciiString(f"prs-geom {__version__}"))
-            if writer.Write(path) != IFSelect_RetDone:
-                raise EnvironmentFailure(f"cannot write {target}: the STEP writer failed")
-    finally:
-        Interface_Static.SetCVal_s("write.step.schema", previous)
+    write_document(doc, path, target, colours=True)
 
 
 def _name(label) -> str:
