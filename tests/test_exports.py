@@ -20,11 +20,14 @@ def built(tmp_path_factory):
 def test_stl_files_read_back_to_the_reported_meshes(built):
     d, out, report = built
     rows = {r["part"]: r for r in report["checks"]["meshes"]}
+    parts = {r["name"]: r for r in report["assembly"]["complete_parts"]}
     for part in ("screw", "roller", "nut"):
+        # the file is the complete part (thread and the rest of its body)
         m = trimesh.load(out / f"{part}.stl")
-        assert len(m.faces) == rows[part]["triangles"]
-        assert m.is_watertight
-        assert m.volume == pytest.approx(rows[part]["volume_mm3"], rel=1e-6)
+        assert len(m.faces) == parts[part]["triangles"]
+        assert m.is_watertight and parts[part]["closed"] and parts[part]["shells"] == 1
+        assert m.volume == pytest.approx(parts[part]["volume_mm3"], rel=1e-6)
+        assert m.volume > rows[part]["volume_mm3"]        # more than the thread alone
         assert rows[part]["float32_rounding_mm"] < 5e-6
     asm = trimesh.load(out / "assembly.stl")
     # one closed shell per rigid body: screw, nut (with its ring gears), 5 rollers (with gears)

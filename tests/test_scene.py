@@ -190,7 +190,10 @@ def test_3mf_reads_back_with_one_object_per_part_in_millimetres(built):
     assert {"screw", "nut", "roller"} <= set(m["objects"])
     rollers = [f"roller_{k}" for k in range(d.roller.count)]
     assert {m["item_object"][r] for r in rollers} == {"roller"}     # one mesh, z build items
-    assert set(m["items"]) == set(report["assembly"]["parts"])
+    parts = {row["name"]: row for row in report["assembly"]["complete_parts"]}
+    # one object per complete part, one build item per copy
+    assert set(m["objects"]) == set(parts)
+    assert set(m["items"]) == {body for row in parts.values() for body in row["instances"]}
     for k in (0, 3):
         # lib3mf keeps transforms as float32 and writes them with 6 decimals: ~5 nm here
         np.testing.assert_allclose(m["items"][f"roller_{k}"], roller_transform(d, k), atol=1e-5)
@@ -203,8 +206,7 @@ def test_3mf_reads_back_with_one_object_per_part_in_millimetres(built):
         # volumes agree within surface area x 4e-6 mm
         stl = trimesh.load(out / f"{name}.stl", file_type="stl", process=False)
         assert abs(vol - stl.volume) <= stl.area * 4e-6, (name, vol, stl.volume)
-        assert vol == pytest.approx(next(r["volume_mm3"] for r in report["checks"]["meshes"]
-                                         if r["part"] == name), rel=1e-6)
+        assert vol == pytest.approx(parts[name]["volume_mm3"], rel=1e-6)
 
 
 def test_writing_3mf_leaves_the_process_locale_as_it_was(tmp_path):
@@ -227,23 +229,30 @@ def test_assembly_stl_is_closed_and_holds_every_part(built):
     """assembly.stl read back by trimesh: closed (every edge used by exactly two faces after
     merging coincident vertices, although a roller and its gears, the nut and its ring gears,
     touch face to face), and its volume is the sum of the 3MF build items' (an independent
-    reader of the other file), within the float32 rounding."""
+    reader of the other file), within the float32 rounding. Each 3MF object (a complete part)
+    is the union of its pieces: their volumes less the overlaps, which are checked against
+    their closed forms, plus the datum slot the union fills."""
+    from prs_geom.analysis.contact import theoretical_screw
+    from prs_geom.mesh.assembly import build_assembly
+
     d, out, report = built
     stl = trimesh.load(out / "assembly.stl", file_type="stl")
     assert stl.is_watertight and stl.is_winding_consistent
     m = read_3mf(out / "assembly.3mf")
     vols = {name: trimesh.Trimesh(V, F, process=False).volume for name, (V, F) in m["objects"].items()}
     total = sum(vols[m["item_object"][item]] for item in m["items"])
-    # the 3MF items overlap where each nut end sleeve grips its ring gear's body (an
-    # annulus, docs/theory/mechanism.md), where the nut flange grips the lower nut end (an
-    # annulus 0.5 mm thick) and where each screw end's run-out cylinder lies in the thread;
-    # assembly.stl unites the parts of a body and counts each once (measured on the 3MF meshes
-    # read back; the closed forms of the true circles agree to 0.1 %)
+    assert abs(stl.volume - total) <= stl.area * 4e-6, (stl.volume, total)
+    # the pieces overlap where each nut end sleeve grips its ring gear's body (an annulus,
+    # docs/theory/mechanism.md), where the nut flange grips the lower nut end (an annulus 0.5
+    # mm thick) and where each screw end's run-out cylinder lies in the thread; the complete
+    # part counts each once (the closed forms of the true circles agree to 0.1 %)
     lay, act = layout(d), actuator_layout(d)
+    # the pieces as the build placed them (its screw is the theoretical one)
+    asm = build_assembly(d, screw_profile=theoretical_screw(d).profile)
 
     def overlap_of(one: str, other: str) -> float:
-        a, b = (m["objects"][m["item_object"][item]] for item in (one, other))
-        return (solid(*a) ^ solid(*b)).volume()
+        a, b = asm.placed_mesh(one), asm.placed_mesh(other)
+        return (solid(a.vertices, a.faces) ^ solid(b.vertices, b.faces)).volume()
 
     gear = sum(overlap_of(f"nut_end_{side}", f"nut_ring_gear_{side}") for side in ("lo", "hi"))
     exact = math.pi * (lay.ring_gear_outer_radius_mm ** 2 - lay.nut_end_sleeve_inner_radius_mm ** 2) \
@@ -255,13 +264,16 @@ def test_assembly_stl_is_closed_and_holds_every_part(built):
     assert flange == pytest.approx(math.pi * (R ** 2 - (R - 0.5) ** 2) * t, abs=2 * math.pi * (2 * R - 0.5) * t * 1e-3)
     ends = overlap_of("screw", "screw_end_lo") + overlap_of("screw", "screw_end_hi")
     # the run-out cylinders (root radius less the chord tolerance), less the datum slot of
-    # screw.stl's face A that the lower one fills
+    # the thread's face A that the lower one fills
     r_ro = 0.5 * d.screw.minor_diameter_mm - max(0.01, d.mesh.chord_tolerance_mm)
     slot = datum_mark(ThreadProfiles.from_design(d).screw, act.thread_z[0]).volume
     run_outs = sum(math.pi * r_ro ** 2 * (e.run_out[1] - e.run_out[0]) for e in act.ends)
     assert ends == pytest.approx(run_outs - slot, rel=1e-3)
-    overlap = gear + flange + ends
-    assert abs(stl.volume - (total - overlap)) <= stl.area * 4e-6, (stl.volume, total)
+    parts = {row["name"]: row for row in report["assembly"]["complete_parts"]}
+    for name, overlap in (("nut", gear + flange), ("screw", ends)):
+        pieces = sum(float(asm.placed[p][0].volume) for p in parts[name]["pieces"])
+        expected = pieces - overlap + parts[name]["filled_voids_mm3"]
+        assert abs(vols[name] - expected) <= 1e-3 * overlap + stl.area * 4e-6, (name, vols[name], expected)
 
 
 def _box_scene():
