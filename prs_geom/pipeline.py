@@ -473,7 +473,8 @@ def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     """``<part>.step`` per made part (one file each, named like its STL: the CAD habit) and
     ``assembly.step`` (:mod:`prs_geom.exports.step_assembly`) with every part placed."""
     from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, step_solid, write_solids
-    from prs_geom.exports.step_assembly import ASSEMBLY_FILE, assembly_files, write_step_assembly
+    from prs_geom.exports.step_assembly import (ASSEMBLY_FILE, assembly_files, envelope_shapes, product_labels,
+                                                write_step_assembly)
 
     d = ctx.design
     solids = [step_solid(d, part, screw_profile=ctx.results.contact.screw_profile) for part in ("screw", "roller", "nut")]
@@ -484,8 +485,9 @@ def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     ctx.results.step = tuple(writes)
     ctx.results.files += step_files(ctx.results.step)
     ctx.results.warnings += step_warnings(ctx.results.step)
-    shapes = {s.part: s.shape for s in solids if s.valid}
-    ctx.results.step_assembly = write_step_assembly(asm.complete_parts(), shapes, ctx.out / ASSEMBLY_FILE, d.name)
+    shapes = {**{s.part: s.shape for s in solids if s.valid}, **envelope_shapes(d)}
+    ctx.results.step_assembly = write_step_assembly(asm.complete_parts(), shapes, ctx.out / ASSEMBLY_FILE, d.name,
+                                                    product_labels(d))
     ctx.results.files += assembly_files(ctx.results.step_assembly)
 
 

@@ -409,14 +409,11 @@ def _check_step_assembly(out: Path, report: dict) -> None:
     counts: dict[str, int] = {}
     for inst in back.instances:
         counts[inst.product] = counts.get(inst.product, 0) + 1
-    # the parts list's quantities, by its part names (purchased rows without a solid, the
-    # bolts and the key, have no product)
+    # each product is named as its parts-list line and has that line's quantity of copies;
+    # every line has a product but the bolts and the key (purchased, not modelled)
     rows = {row["part"]: row["quantity"] for row in report["parts_list"]}
-    names = {"screw": "screw", "roller": "roller", "nut": "nut", "carrier": "carrier",
-             "retaining_ring": "retaining ring", "bearing_fixed": "bearing, fixed end",
-             "bearing_floating": "bearing, floating end", "locknut": "locknut", "shaft_ring": "shaft ring"}
-    assert counts == {p: rows[names[p]] for p in counts}
-    assert {names[p] for p in counts} >= {r for r in rows if r not in ("flange bolt", "drive key")}
+    assert counts == {p: rows[p] for p in counts}
+    assert set(counts) == set(rows) - {"flange bolt", "drive key"}
     glb = glb_node_transforms(out / "assembly.glb")
     for inst in back.instances:
         T = glb[inst.name]

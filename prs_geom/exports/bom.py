@@ -88,6 +88,9 @@ class PartItem:
     description: str
     #: the rigid body (scene name) whose volume is one piece's; None for a purchased part
     body: str | None
+    #: a purchased part modelled as an envelope: the scene name of its first copy (None when
+    #: it is not modelled, like the bolts and the key)
+    envelope: str | None = None
 
     @property
     def purchased(self) -> bool:
@@ -96,8 +99,8 @@ class PartItem:
 
 
 #: One parts-list line before numbering: part, quantity, material (None: purchased),
-#: designation, description, rigid body (None: purchased).
-_Row = tuple[str, int, Any, str, str, "str | None"]
+#: designation, description, rigid body (None: purchased)[, envelope's scene name].
+_Row = tuple[Any, ...]
 
 
 def part_items(design: Any) -> list[PartItem]:
@@ -139,7 +142,7 @@ def part_items(design: Any) -> list[PartItem]:
                      "internal retaining ring for bores", "retaining_ring_lo"))
     if act is not None:
         rows += _actuator_rows(act)
-    fields = ("part", "quantity", "material", "designation", "description", "body")
+    fields = ("part", "quantity", "material", "designation", "description", "body", "envelope")
     return [PartItem(item=i, **dict(zip(fields, row))) for i, row in enumerate(rows, start=1)]
 
 
@@ -155,15 +158,16 @@ def _actuator_rows(act: Any) -> list[_Row]:
                     else "deep groove ball bearing, free to slide in its housing")
             rows.append((f"bearing, {end.role} end", len(end.bearings), None, b.designation,
                          f"{kind}; d x D x B = {b.size.bore_mm:g} x {b.size.outer_diameter_mm:g} x "
-                         f"{b.size.width_mm:g} mm (ISO 15); {PURCHASED}", None))
+                         f"{b.size.width_mm:g} mm (ISO 15); {PURCHASED}", None, f"bearing_{end.role}_0"))
     for end in act.ends:
         if end.locknut is not None:
             rows.append(("locknut", 1, None, end.locknut.designation,
                          f"precision locknut (ISO 2982-2), thread {end.locknut.thread} {end.locknut_tolerance} on the "
-                         f"screw, clamps the {end.role} end's bearings; {PURCHASED}", None))
+                         f"screw, clamps the {end.role} end's bearings; {PURCHASED}", None, "locknut"))
         if end.ring is not None:
             rows.append(("shaft ring", 1, None, end.ring.designation,
-                         f"retaining ring for shafts (DIN 471), holds the {end.role} end's bearing; {PURCHASED}", None))
+                         f"retaining ring for shafts (DIN 471), holds the {end.role} end's bearing; {PURCHASED}", None,
+                         "shaft_ring"))
     m = act.nut_mount
     if m.kind == "flange" and m.bolt is not None:
         rule = act.sizes["actuator.nut_mount.bolt_length_mm"].source

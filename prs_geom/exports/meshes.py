@@ -123,12 +123,11 @@ def complete_scene(asm: Assembly, title: str = "") -> "Any":
     """A flat :class:`~prs_geom.exports.scene.Scene` of the complete parts: one mesh per
     part (its own frame), one node per copy named after its rigid body, placed by the
     copy's transform."""
-    from prs_geom.exports.scene import MATERIALS, Scene, SceneMesh, SceneNode
+    from prs_geom.exports.scene import MATERIALS, Scene, SceneMesh, SceneNode, part_family
 
     meshes, nodes = {}, []
     for part in asm.complete_parts().values():
-        family = part.name if part.name in MATERIALS else part.name.split("_")[0]
-        meshes[part.name] = SceneMesh(part.name, part.vertices, part.faces, family)
+        meshes[part.name] = SceneMesh(part.name, part.vertices, part.faces, part_family(part.name))
         nodes += [SceneNode(body, part.name, part.transforms[k]) for k, body in enumerate(part.instances)]
     mats = {k: v for k, v in MATERIALS.items() if k in {m.material for m in meshes.values()}}
     return Scene(meshes, mats, tuple(nodes), title)

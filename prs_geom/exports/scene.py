@@ -46,7 +46,7 @@ from prs_geom.model.io import atomic_path, write_file_atomic
 
 __all__ = ["ANIMATION_PERIOD_S", "ANIMATION_STEP_DEG", "MATERIALS", "SHARP_EDGE_DEG", "Z_UP_TO_Y_UP", "Material",
            "Scene", "SceneAnimation", "SceneMesh", "SceneNode", "animation_angles", "assembly_scene", "glb_bytes",
-           "mechanism_animation", "moving_group", "quaternions", "split_normals", "write_3mf", "write_glb"]
+           "mechanism_animation", "moving_group", "part_family", "quaternions", "split_normals", "write_3mf", "write_glb"]
 
 #: Corners whose adjacent faces bend by more than this share no normal (deg).
 SHARP_EDGE_DEG = 30.0
@@ -68,13 +68,19 @@ class Material:
             raise ValueError(f"material {self.name!r}: colour, metallic and roughness must lie in [0, 1]")
 
     @property
+    def srgb(self) -> tuple[float, float, float]:
+        """The colour's red, green and blue in sRGB, each in [0, 1] (3MF and STEP colours
+        are sRGB; glTF's are linear)."""
+        def enc(c: float) -> float:
+            return min(max(12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055, 0.0), 1.0)
+        r, g, b, _ = self.colour
+        return enc(r), enc(g), enc(b)
+
+    @property
     def srgb_hex(self) -> str:
         """The colour as sRGB ``#RRGGBBAA`` (3MF display colours are sRGB)."""
-        def enc(c: float) -> int:
-            s = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
-            return int(round(255 * min(max(s, 0.0), 1.0)))
-        r, g, b, a = self.colour
-        return "#%02X%02X%02X%02X" % (enc(r), enc(g), enc(b), int(round(255 * a)))
+        r, g, b = (int(round(255 * c)) for c in self.srgb)
+        return "#%02X%02X%02X%02X" % (r, g, b, int(round(255 * self.colour[3])))
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,8 +196,9 @@ def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
     return q
 
 
-def _family(name: str) -> str:
-    """The material key of a placed part (its family: screw, roller, gear, ...)."""
+def part_family(name: str) -> str:
+    """The material key (:data:`MATERIALS`) of a scene part or a complete part: its family
+    (screw, roller, gear, bearing, ...)."""
     for family in ("retaining_ring", "shaft_ring"):
         if name.startswith(family):
             return family
@@ -209,7 +216,7 @@ def _scene_meshes(asm: Any) -> tuple[dict[str, SceneMesh], dict[int, str]]:
             key = base if base not in meshes else f"{base}_{len(meshes)}"
             by_id[id(mesh)] = key
             meshes[key] = SceneMesh(key, np.asarray(mesh.vertices, dtype=np.float64),
-                                    np.asarray(mesh.faces, dtype=np.int64), _family(name))
+                                    np.asarray(mesh.faces, dtype=np.int64), part_family(name))
     return meshes, by_id
 
 

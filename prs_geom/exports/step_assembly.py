@@ -35,7 +35,7 @@ from prs_geom.model.io import atomic_path
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.parts import CompletePart
 
-__all__ = ["ASSEMBLY_FILE", "assembly_files", "placement_problems", "rotation_angle", "StepAssemblyContent", "StepInstance", "envelope_shape", "read_step_assembly",
+__all__ = ["ASSEMBLY_FILE", "assembly_files", "envelope_shapes", "placement_problems", "product_labels", "rotation_angle", "StepAssemblyContent", "StepInstance", "read_step_assembly",
            "write_step_assembly"]
 
 #: The assembly file's name.
@@ -91,49 +91,61 @@ def _matrix(trsf) -> NDArray[np.float64]:
     return T
 
 
-def envelope_shape(part: "CompletePart") -> Any:
-    """A purchased part's envelope as an exact B-rep ring: the outer and inner radius and
-    the height of its mesh's bounding cylinder (part frame, z = 0 at its lower face)."""
+def envelope_shapes(design: Any) -> dict[str, Any]:
+    """The purchased parts of ``design``'s actuator (none without one) as exact B-rep rings,
+    keyed by complete-part name (``bearing_fixed``, ``locknut`` ...): each envelope
+    (:func:`prs_geom.mesh.actuator.purchased_envelopes`) at its catalogue radii, in its
+    part frame (axis z, z = 0 at its lower face) like its mesh."""
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
     from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
 
-    V = part.vertices
-    r = np.hypot(V[:, 0], V[:, 1])
-    z0, z1 = float(V[:, 2].min()), float(V[:, 2].max())
-    # the outside's polygon vertices lie on its circle; the bore's edges are tangent to its
-    # circle, so the bore's radius is the smallest vertex radius times cos(pi / n)
-    outer = float(r.max())
-    n_inner = int(np.count_nonzero(np.isclose(r, r.min(), rtol=1e-9, atol=0.0)) // 2) or 1
-    inner = float(r.min()) * math.cos(math.pi / max(n_inner, 3))
-    ax = gp_Ax2(gp_Pnt(0.0, 0.0, z0), gp_Dir(0.0, 0.0, 1.0))
-    body = BRepPrimAPI_MakeCylinder(ax, outer, z1 - z0).Shape()
-    bore = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0 - 1.0), gp_Dir(0.0, 0.0, 1.0)), inner, z1 - z0 + 2.0)
-    op = BRepAlgoAPI_Cut(body, bore.Shape())
-    op.Build()
-    return op.Shape()
+    from prs_geom.geometry.actuator import actuator_layout
+    from prs_geom.mesh.actuator import purchased_envelopes
+    from prs_geom.mesh.parts import part_name
+
+    lay = actuator_layout(design)
+    out: dict[str, Any] = {}
+    for env in purchased_envelopes(lay) if lay is not None else ():
+        name = part_name(env.name)
+        if name in out:
+            continue
+        width = env.z[1] - env.z[0]
+        body = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)),
+                                        env.outer_radius_mm, width).Shape()
+        # the bore overshoots both faces, so no cut face is coplanar with one
+        bore = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, -1.0), gp_Dir(0.0, 0.0, 1.0)),
+                                        env.inner_radius_mm, width + 2.0).Shape()
+        op = BRepAlgoAPI_Cut(body, bore)
+        op.Build()
+        out[name] = op.Shape()
+    return out
 
 
-def _shape_kind(part: "CompletePart", shapes: Mapping[str, Any], thread_bodies: tuple[str, ...]) -> str:
-    if part.name not in shapes:
+def product_labels(design: Any) -> dict[str, str]:
+    """The STEP product name of each complete part: its parts-list line's part name
+    (``retaining ring``, ``bearing, fixed end``), so that a product and its line match."""
+    from prs_geom.exports.bom import part_items
+    from prs_geom.mesh.parts import part_name
+
+    return {part_name(body): it.part for it in part_items(design)
+            for body in (it.body or it.envelope,) if body is not None}
+
+
+def _shape_kind(part: "CompletePart", thread_bodies: tuple[str, ...]) -> str:
+    if part.purchased:
         return "envelope"
     return "thread body" if part.name in thread_bodies else "solid"
 
 
-def _srgb(colour: tuple[float, float, float, float]) -> tuple[float, float, float]:
-    def enc(c: float) -> float:
-        return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
-    return tuple(min(max(enc(c), 0.0), 1.0) for c in colour[:3])  # type: ignore[return-value]
-
-
-def _write(path: str, title: str, parts: list[tuple["CompletePart", Any]], target: Path) -> None:
+def _write(path: str, title: str, products: list[tuple[str, "CompletePart", Any]], target: Path) -> None:
     from OCP.Quantity import Quantity_Color, Quantity_TOC_sRGB
     from OCP.TCollection import TCollection_ExtendedString
     from OCP.TDataStd import TDataStd_Name
     from OCP.TopLoc import TopLoc_Location
     from OCP.XCAFDoc import XCAFDoc_ColorType, XCAFDoc_DocumentTool
 
-    from prs_geom.exports.scene import MATERIALS
+    from prs_geom.exports.scene import MATERIALS, part_family
     from prs_geom.exports.step import write_document
 
     doc = _new_document()
@@ -141,11 +153,10 @@ def _write(path: str, title: str, parts: list[tuple["CompletePart", Any]], targe
     colours = XCAFDoc_DocumentTool.ColorTool_s(doc.Main())
     root = tool.NewShape()
     TDataStd_Name.Set_s(root, TCollection_ExtendedString(title))
-    for part, shape in parts:
+    for product, part, shape in products:
         label = tool.AddShape(shape, False)
-        TDataStd_Name.Set_s(label, TCollection_ExtendedString(part.name))
-        family = part.name if part.name in MATERIALS else part.name.split("_")[0]
-        r, g, b = _srgb(MATERIALS[family].colour)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(product))
+        r, g, b = MATERIALS[part_family(part.name)].srgb
         colours.SetColor(label, Quantity_Color(r, g, b, Quantity_TOC_sRGB), XCAFDoc_ColorType.XCAFDoc_ColorSurf)
         for k, body in enumerate(part.instances):
             comp = tool.AddComponent(root, label, TopLoc_Location(_trsf(part.transforms[k])))
@@ -202,38 +213,45 @@ def read_step_assembly(path: str | os.PathLike) -> StepAssemblyContent:
 
 
 def write_step_assembly(parts: Mapping[str, "CompletePart"], shapes: Mapping[str, Any], path: str | os.PathLike,
-                        title: str, thread_bodies: tuple[str, ...] = ("screw", "roller", "nut")) -> dict[str, Any]:
+                        title: str, labels: Mapping[str, str] | None = None,
+                        thread_bodies: tuple[str, ...] = ("screw", "roller", "nut")) -> dict[str, Any]:
     """Write the assembly of ``parts`` (:meth:`prs_geom.mesh.assembly.Assembly.complete_parts`)
-    with the product shapes ``shapes`` (by part name; a purchased part without one gets its
-    envelope, :func:`envelope_shape`; a made part without one is left out and listed), read
-    it back and check every product and placement; only then move it into place. The parts
-    named in ``thread_bodies`` are reported as such (``shape`` "thread body"): their shape is
-    the thread's B-rep without the gears, journals, ends and flange of the complete part.
+    with the product shapes ``shapes`` (by part name; a part without one is left out and
+    listed as missing), read it back and check every product and placement; only then move
+    it into place.
+
+    Parameters
+    ----------
+    parts : mapping of str to CompletePart
+        The complete parts with their copies' transforms.
+    shapes : mapping of str to TopoDS_Shape
+        Each part's B-rep in its part frame (:func:`envelope_shapes` for the purchased parts).
+    path : str or PathLike
+        The file to write.
+    title : str
+        The root assembly's name (the design's).
+    labels : mapping of str to str, optional
+        Product name by part name (:func:`product_labels`); the part name where absent.
+    thread_bodies : tuple of str
+        Parts whose shape is the thread's B-rep only, without the gears, journals, ends and
+        flange of the complete part: reported as such (``shape`` "thread body").
 
     Returns
     -------
     dict
         The report entry ``step.assembly``: ``file`` (None when the read-back check failed,
-        see ``problems``), ``products`` (name -> {instances, shape}), ``missing`` (made parts
-        without a solid), ``stroke_position_mm`` (0: mid-stroke), ``placement_max_diff_mm``
-        and ``placement_max_diff_rad`` (largest difference read back).
+        see ``problems``), ``products`` (product name -> {instances, shape}), ``missing``
+        (parts without a shape), ``stroke_position_mm`` (0: mid-stroke),
+        ``placement_max_diff_mm`` and ``placement_max_diff_rad`` (largest difference read back).
     """
     require_ocp()
     path = Path(path)
-    chosen: list[tuple[CompletePart, Any]] = []
-    missing = []
-    for name, part in parts.items():
-        shape = shapes.get(name)
-        if shape is None and part.purchased:
-            shape = envelope_shape(part)
-        if shape is None:
-            missing.append(name)
-            continue
-        chosen.append((part, shape))
+    labels = labels or {}
+    chosen = [(labels.get(name, name), part, shapes[name]) for name, part in parts.items() if name in shapes]
     section: dict[str, Any] = {
-        "file": None, "stroke_position_mm": 0.0, "missing": missing,
-        "products": {p.name: {"instances": list(p.instances), "shape": _shape_kind(p, shapes, thread_bodies)}
-                     for p, _ in chosen},
+        "file": None, "stroke_position_mm": 0.0, "missing": [name for name in parts if name not in shapes],
+        "products": {product: {"instances": list(part.instances), "shape": _shape_kind(part, thread_bodies)}
+                     for product, part, _ in chosen},
         "placement_max_diff_mm": None, "placement_max_diff_rad": None,
     }
     try:
@@ -268,19 +286,20 @@ class _Rejected(Exception):
     pass
 
 
-def placement_problems(chosen: list[tuple["CompletePart", Any]], back: StepAssemblyContent) -> tuple[list[str], float, float]:
+def placement_problems(chosen: list[tuple[str, "CompletePart", Any]],
+                       back: StepAssemblyContent) -> tuple[list[str], float, float]:
     """What the read-back assembly gets wrong: a product or copy missing or misplaced beyond
     :data:`PLACEMENT_TOLERANCE`; and the largest placement differences (mm, rad)."""
     problems = []
     by_name = {inst.name: inst for inst in back.instances}
     dmm = drad = 0.0
-    for part, _ in chosen:
-        if part.name not in back.products:
-            problems.append(f"product {part.name} is not in the file")
+    for product, part, _ in chosen:
+        if product not in back.products:
+            problems.append(f"product {product} is not in the file")
         for k, body in enumerate(part.instances):
             inst = by_name.get(body)
-            if inst is None or inst.product != part.name:
-                problems.append(f"copy {body} of {part.name} is not in the file")
+            if inst is None or inst.product != product:
+                problems.append(f"copy {body} of {product} is not in the file")
                 continue
             T = part.transforms[k]
             dmm = max(dmm, float(np.abs(inst.transform[:3, 3] - T[:3, 3]).max()))

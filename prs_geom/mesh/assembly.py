@@ -348,7 +348,7 @@ def _place(asm: Assembly, gear_parts: dict[str, trimesh.Trimesh] | None, progres
             zs = np.asarray(mesh.vertices) @ T_own[2, :3] + T_own[2, 3]
             if not (zs.max() > gear_window[0] and zs.min() < gear_window[1]):
                 continue
-        T = T_own if k is None else (transforms[k] if np.array_equal(T_own, I) else transforms[k] @ T_own)
+        T = T_own if k is None else transforms[k] @ T_own
         asm.placed[name] = (mesh, T, kind)
         if table == "parts" and key == "roller":
             progress("placing rollers", k + 1, z)
