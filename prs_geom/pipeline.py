@@ -175,8 +175,17 @@ def design_pitch(design: PRSDesign, target: str | dict[str, Any] = "equal", name
 
 
 def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trimesh.Trimesh"]:
-    """Triangle meshes of the design, by name: ``screw``, ``roller`` and ``nut`` in their
-    own frames, and every placed scene part (``roller_0`` ..., gears) in the screw frame.
+    """Triangle meshes of the design, by name, as ``prs-geom build`` writes them.
+
+    * ``screw``, ``roller``, ``nut``, ``carrier``, ``retaining_ring`` (and an actuator's
+      purchased envelopes): the complete parts in their own frames, the solids of the
+      per-part STL files (:mod:`prs_geom.mesh.parts`; the screw is the theoretical screw
+      the analysis certifies, as ``screw.stl``).
+    * ``screw_thread``, ``roller_thread``, ``nut_thread``: the thread bodies alone in the
+      same frames (face A, datum A, at z = 0 of the roller and the nut).
+    * every placed piece of the assembly (``roller_0`` ..., ``roller_0_gear_lo``, ...) in
+      the screw frame.
+
     ``tol`` is the chord tolerance (mm; the design's by default).
 
     Examples
@@ -186,10 +195,15 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
     >>> all(meshes[name].is_watertight for name in ("screw", "roller", "nut"))
     True
     """
+    import trimesh
+
+    from prs_geom.analysis.contact import theoretical_screw
     from prs_geom.mesh.assembly import build_assembly
 
-    asm = build_assembly(design, tol=tol)
-    out = {name: tm.to_trimesh() for name, tm in asm.parts.items()}
+    asm = build_assembly(design, tol=tol, screw_profile=theoretical_screw(design).profile)
+    out = {name: trimesh.Trimesh(part.vertices, part.faces, process=False)
+           for name, part in asm.complete_parts().items()}
+    out.update({f"{name}_thread": tm.to_trimesh() for name, tm in asm.parts.items()})
     for name in asm.placed:
         if name not in ("screw", "nut"):
             out[name] = asm.placed_mesh(name)

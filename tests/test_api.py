@@ -82,3 +82,22 @@ def test_api_round_trip_and_objects(tmp_path):
     assert res.contact.theoretical_screw_pitch_diameter_mm < d.screw.pitch_diameter_mm
     harmonic = pg.load_design(ROOT / "examples" / "harmonic.toml")
     assert isinstance(harmonic, pg.HarmonicDesign)
+
+
+def test_build_meshes_are_the_part_files(tmp_path):
+    """pg.build_meshes gives the solids ``prs-geom build`` writes: the complete screw, roller
+    and nut equal their STL files read back by trimesh (float32 rounding), and the thread
+    bodies alone are smaller by the gears, journals, ends and flange."""
+    import trimesh
+
+    from prs_geom.model.design import MeshSettings, Thread
+
+    d = pg.default_design().with_changes(thread=Thread(engaged_teeth=6), mesh=MeshSettings(chord_tolerance_mm=0.05))
+    meshes = pg.build_meshes(d)
+    pg.build(d, tmp_path / "out")
+    for part in ("screw", "roller", "nut", "carrier", "retaining_ring"):
+        stl = trimesh.load(tmp_path / "out" / f"{part}.stl")
+        assert meshes[part].volume == pytest.approx(stl.volume, rel=1e-6), part
+    for part in ("screw", "roller", "nut"):
+        assert meshes[f"{part}_thread"].volume < 0.9 * meshes[part].volume, part
+    assert {"roller_0", "roller_0_gear_lo", "nut_ring_gear_hi"} <= set(meshes)

@@ -174,7 +174,7 @@ def test_sheet_flanks_and_datum_exist_on_the_meshed_parts():
     meshes = build_meshes(d)
     tol = 0.03                                   # chord 0.01 mm on a 45 deg flank, plus the helix
     for part in ("roller", "nut"):
-        mesh = meshes[part]
+        mesh = meshes[f"{part}_thread"]        # the thread body: datum A is its end face z = 0
         r = getattr(ThreadProfiles.from_design(d), part).pitch_radius
         # the section by the plane y = 0 (segments), crossed by the line x = r, x > 0
         seg = trimesh.intersections.mesh_plane(mesh, [0.0, 1.0, 0.0], [0.0, 0.0, 0.0])
