@@ -486,12 +486,17 @@ def stage_meshes(ctx: BuildContext) -> None:
 def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     """``<part>.step`` per made part (one file each, named like its STL: the CAD habit) and
     ``assembly.step`` (:mod:`prs_geom.exports.step_assembly`) with every part placed."""
-    from prs_geom.exports.step import MECHANISM_STEP_PARTS, mechanism_step_solid, step_solid, write_solids
+    from prs_geom.exports.step import (MECHANISM_STEP_PARTS, complete_screw_solid, mechanism_step_solid, step_solid,
+                                       write_solids)
     from prs_geom.exports.step_assembly import (ASSEMBLY_FILE, assembly_files, envelope_shapes, product_labels,
                                                 write_step_assembly)
 
     d = ctx.design
-    solids = [step_solid(d, part, screw_profile=ctx.results.contact.screw_profile) for part in ("screw", "roller", "nut")]
+    screw_profile = ctx.results.contact.screw_profile
+    solids = [step_solid(d, part, screw_profile=screw_profile) for part in ("screw", "roller", "nut")]
+    # the screw with its wheel exits and ends (exact solids of revolution, fast booleans); the
+    # roller's gear zones and the nut's ring gears are not yet (docs/step.md)
+    solids[0] = complete_screw_solid(d, solids[0], asm.complete_part("screw").volume_mm3, screw_profile)
     # the carrier and the ring (when the design has them) as exact B-reps
     solids += [mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])
                for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]
@@ -500,8 +505,10 @@ def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     ctx.results.files += step_files(ctx.results.step)
     ctx.results.warnings += step_warnings(ctx.results.step)
     shapes = {**{s.part: s.shape for s in solids if s.valid}, **envelope_shapes(d)}
+    thread_bodies = tuple(s.part for s in solids[:3] if not s.complete and s.part in asm.complete_parts()
+                          and len(asm.complete_parts()[s.part].pieces) > 1)
     ctx.results.step_assembly = write_step_assembly(asm.complete_parts(), shapes, ctx.out / ASSEMBLY_FILE, d.name,
-                                                    product_labels(d))
+                                                    product_labels(d), thread_bodies)
     ctx.results.files += assembly_files(ctx.results.step_assembly)
 
 

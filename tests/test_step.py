@@ -486,3 +486,58 @@ def test_a_step_write_that_fails_midway_leaves_no_file(ocp, tmp_path, monkeypatc
     assert section["reread_problems"] == ["the roller is missing by name in the file read back"]
     assert section["parts"]["roller"]["reread_name"] is False
     assert list(tmp_path.iterdir()) == []
+
+
+# --------------------------------------------------------------------------- complete screw
+@pytest.mark.heavy
+def test_complete_screw_is_one_solid_of_its_closed_form(ocp, heavy_scale):
+    """The actuator's screw as one B-rep (issue 32): the thread body united with the wheel
+    exits and both ends, the keyway cut. One valid solid; its volume equals the sum of closed
+    forms (thread, run-outs, end cylinders, keyway) within 1e-4 and the complete mesh's within
+    0.2 %; the keyway's closed form equals OpenCascade's volume of the journal cut by the
+    key's stadium (a second formulation); sections through the ends have their step radii."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Common
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    from prs_geom.analysis.contact import theoretical_screw
+    from prs_geom.checks.brep import shape_volume
+    from prs_geom.exports.step import _drive_cutter, complete_screw_solid, step_solid
+    from prs_geom.geometry.actuator import actuator_layout
+    from prs_geom.mesh.actuator import drive_journal_radius
+    from prs_geom.mesh.assembly import build_assembly
+    from prs_geom.mesh.volumes import keyway_volume
+    from prs_geom.model.design import MeshSettings, Thread
+
+    d = default_design()
+    if heavy_scale != "full":
+        d = d.with_changes(thread=Thread(engaged_teeth=6), mesh=MeshSettings(chord_tolerance_mm=0.02),
+                           actuator=dataclasses.replace(d.actuator, stroke_mm=10.0))
+    sp = theoretical_screw(d).profile
+    mesh = build_assembly(d, screw_profile=sp).complete_parts()["screw"]
+    thread = step_solid(d, "screw", screw_profile=sp)
+    s = complete_screw_solid(d, thread, mesh.volume_mm3, sp)
+    assert s.valid and s.complete, s.reason
+    assert brep_valid(s.shape)
+    assert s.analytic_volume_mm3 is not None
+    assert occ_volume(s.shape) == pytest.approx(s.analytic_volume_mm3, rel=1e-4)
+    assert abs(s.volume_mm3 - mesh.volume_mm3) <= 2e-3 * mesh.volume_mm3
+    assert s.volume_mm3 > 1.15 * thread.volume_mm3             # the ends are there
+    lay = actuator_layout(d)
+    drive = next(e for e in lay.ends if e.key is not None)
+    r_j = drive_journal_radius(drive)
+    z0, z1 = drive.key_z
+    journal = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0 - 1.0), gp_Dir(0.0, 0.0, 1.0)), r_j,
+                                       z1 - z0 + 2.0).Shape()
+    removed = shape_volume(BRepAlgoAPI_Common(journal, _drive_cutter(drive)).Shape())
+    assert keyway_volume(r_j, drive.key.width_mm, drive.key.shaft_depth_mm, z1 - z0) == pytest.approx(removed, rel=1e-9)
+    # each step's radius, probed on -y (away from the keyway on +x) at the middle of the step
+    for end in lay.ends:
+        for st in end.steps:
+            zm, r = 0.5 * (st.z[0] + st.z[1]), 0.5 * st.diameter_mm
+            assert classify(s.shape, (0.0, -(r - 1e-4), zm)) == "IN"
+            assert classify(s.shape, (0.0, -(r + 1e-4), zm)) == "OUT"
+    # and the keyway floor at r_j - t1 on +x
+    zm = 0.5 * (z0 + z1)
+    assert classify(s.shape, (r_j - drive.key.shaft_depth_mm - 1e-4, 0.0, zm)) == "IN"
+    assert classify(s.shape, (r_j - drive.key.shaft_depth_mm + 1e-4, 0.0, zm)) == "OUT"

@@ -20,12 +20,15 @@ from prs_geom.mesh.bspline_bands import evaluate_net
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.bspline_bands import BSplineNet
 
-__all__ = ["REREAD_BBOX_TOLERANCE", "SURFACE_HANDOVER_SHARE", "VOLUME_REL_LIMIT", "SolidMeasurement",
-           "bbox_gap", "closed_form_volume_problem", "count_subshapes", "is_valid_shape", "measure_solid",
+__all__ = ["COMPLETE_VOLUME_REL_LIMIT", "REREAD_BBOX_TOLERANCE", "SURFACE_HANDOVER_SHARE", "VOLUME_REL_LIMIT", "SolidMeasurement",
+           "bbox_gap", "closed_form_volume_problem", "complete_solid_problems", "count_subshapes", "is_valid_shape", "measure_solid",
            "occ_bbox", "reread_problems", "shape_volume", "surface_handover_error", "thread_solid_problems"]
 
 #: Largest relative volume difference B-rep vs reference mesh (or closed form) that counts as valid.
 VOLUME_REL_LIMIT = 1e-3
+#: A complete part's B-rep against its mesh: the mesh's polygons (ends, keyway) sit inside the
+#: true circles by their chord tolerance, 0.05-0.08 % of the volume on the default design.
+COMPLETE_VOLUME_REL_LIMIT = 2e-3
 #: Largest difference (mm) between the bounding box of a solid and of its copy read back
 #: from the STEP file (on top of OCC's box gaps); measured: below 1e-12 mm.
 REREAD_BBOX_TOLERANCE = 1e-6
@@ -160,6 +163,22 @@ def thread_solid_problems(measured: SolidMeasurement, mesh_volume_mm3: float, ma
     z_lo, z_hi = z_range
     if not handover_mm <= SURFACE_HANDOVER_SHARE * max(1.0, abs(z_hi), abs(z_lo)):
         problems.append(f"OpenCascade's faces differ from the fitted splines by {handover_mm:.3g} mm")
+    return problems
+
+
+def complete_solid_problems(measured: SolidMeasurement, mesh_volume_mm3: float) -> list[str]:
+    """What is wrong with a complete part's B-rep (the thread body united with its ends):
+    rejected by ``BRepCheck_Analyzer``, not one solid, or a volume off the complete part's
+    mesh (:mod:`prs_geom.mesh.parts`) by more than :data:`COMPLETE_VOLUME_REL_LIMIT`."""
+    problems = []
+    if not measured.analyzer_valid:
+        problems.append("BRepCheck_Analyzer rejects the shape")
+    if measured.solids != 1:
+        problems.append(f"{measured.solids} solids instead of one")
+    rel = (measured.volume_mm3 - mesh_volume_mm3) / mesh_volume_mm3
+    if not abs(rel) <= COMPLETE_VOLUME_REL_LIMIT:
+        problems.append(f"volume {measured.volume_mm3:.6g} mm^3 differs from the complete part's mesh "
+                        f"({mesh_volume_mm3:.6g} mm^3) by {100 * rel:.3g} % (limit {100 * COMPLETE_VOLUME_REL_LIMIT:g} %)")
     return problems
 
 

@@ -23,6 +23,7 @@ part frame (mm, z along the part axis, face A at the lower z).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import os
 import time
@@ -33,8 +34,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from prs_geom.checks.brep import (closed_form_volume_problem, measure_solid, occ_bbox, reread_problems,
-                                  surface_handover_error, thread_solid_problems)
+from prs_geom.checks.brep import (closed_form_volume_problem, complete_solid_problems, measure_solid, occ_bbox,
+                                  reread_problems, surface_handover_error, thread_solid_problems)
 from prs_geom.mesh.bspline_bands import (DEGREE, BandFit, BSplineNet, ThreadSolidReference, face_z_cuts, fit_bands,
                                          sampled_bbox, thread_solid_reference)
 from prs_geom.mesh.mechanism_solids import Cylinder, CylinderSolid, mechanism_part_mesh, mechanism_solid
@@ -46,7 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.thread import ThreadMesh
     from prs_geom.model.design import PRSDesign
 
-__all__ = ["AUTHORITY_NOTE", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
+__all__ = ["AUTHORITY_NOTE", "complete_screw_solid", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
            "StepFileContent", "StepSolid", "mechanism_step_solid", "read_step", "require_ocp", "step_solid",
            "write_solids", "write_step"]
 
@@ -121,6 +122,15 @@ class StepSolid:
     grid : dict
         Sampling of the B-spline faces: degree, grid columns per turn and along the part,
         points across each band kind.
+    complete : bool
+        True when the solid is the complete part (the thread united with its ends,
+        :func:`complete_screw_solid`); ``volume_mm3``, ``mesh_volume_mm3`` and ``bbox`` are
+        then the complete part's, the deviation fields the thread body's.
+    thread_volume_mm3, thread_analytic_volume_mm3 : float or None
+        Of a complete part: its thread body's B-rep volume and that body's closed form
+        (constant pitch) (mm^3), None otherwise.
+    filled_voids_mm3 : float
+        Volume of closed voids filled in the union (a datum slot an end covers), mm^3.
     """
 
     part: str
@@ -141,6 +151,10 @@ class StepSolid:
     deviation_target_mm: float = math.nan
     max_tolerance_mm: float = math.nan
     grid: dict[str, Any] = field(default_factory=dict)
+    complete: bool = False
+    thread_volume_mm3: float | None = None
+    thread_analytic_volume_mm3: float | None = None
+    filled_voids_mm3: float = 0.0
 
     def report(self) -> dict[str, Any]:
         """The per-part entry of the report section ``step`` (JSON types only; a value that
@@ -165,6 +179,10 @@ class StepSolid:
             "max_tolerance_mm": num(self.max_tolerance_mm),
             "bbox_mm": [num(x) for x in self.bbox],
             "grid": dict(self.grid),
+            "complete": self.complete,
+            "thread_volume_mm3": num(self.thread_volume_mm3),
+            "thread_analytic_volume_mm3": num(self.thread_analytic_volume_mm3),
+            "filled_voids_mm3": float(self.filled_voids_mm3),
         }
 
 
@@ -770,3 +788,169 @@ def mechanism_step_solid(design: "PRSDesign", part: str, mesh: Any = None) -> St
                      chord_tolerance_mm=0.0, mesh_tolerance_mm=MECHANISM_CHORD_MM, max_deviation_mm=0.0,
                      analytic_volume_mm3=exact, design_mesh_volume_mm3=mesh_volume, deviation_target_mm=0.0,
                      max_tolerance_mm=math.nan)
+
+
+# --------------------------------------------------------------------------- complete screw
+def _revolved(profile: Sequence[tuple[float, float]]):
+    """The solid of revolution about z of the closed (r, z) polygon ``profile`` (mm): planes,
+    cylinders and cones, exact."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeRevol
+    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+
+    poly = BRepBuilderAPI_MakePolygon()
+    for r, z in profile:
+        poly.Add(gp_Pnt(float(r), 0.0, float(z)))
+    poly.Close()
+    face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+    return BRepPrimAPI_MakeRevol(face, gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0))).Shape()
+
+
+def _boolean(kind: str, shape: Any, tools: Sequence[Any]):
+    """``shape`` fused with or cut by ``tools`` in one OpenCascade boolean (parallel)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+    from OCP.collections import List_TopoDS_Shape
+
+    op = BRepAlgoAPI_Fuse() if kind == "fuse" else BRepAlgoAPI_Cut()
+    args, tls = List_TopoDS_Shape(), List_TopoDS_Shape()
+    args.Append(shape)
+    for t in tools:
+        tls.Append(t)
+    op.SetArguments(args)
+    op.SetTools(tls)
+    op.SetRunParallel(True)
+    op.Build()
+    if not op.IsDone():
+        raise RuntimeError(f"the {kind} of the complete part failed")
+    return op.Shape()
+
+
+def _drive_cutter(end: Any):
+    """The keyway (DIN 6885-1 form A: a box with two half-round ends, floor at r_j - t1) or
+    the flat of a screw end's drive journal, on the +x side, as the mesh cuts it
+    (:mod:`prs_geom.mesh.actuator`), overshooting the journal by ``PAD_MM``."""
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder
+    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+
+    from prs_geom.mesh.actuator import PAD_MM, drive_journal_radius
+
+    r_j = drive_journal_radius(end)
+    z0, z1 = end.key_z
+    if end.key is None:
+        x0 = r_j - end.flat_depth_mm
+        return BRepPrimAPI_MakeBox(gp_Pnt(x0, -r_j - PAD_MM, z0), gp_Pnt(r_j + PAD_MM, r_j + PAD_MM, z1)).Shape()
+    a = 0.5 * end.key.width_mm
+    x0, x1 = r_j - end.key.shaft_depth_mm, r_j + PAD_MM
+    box = BRepPrimAPI_MakeBox(gp_Pnt(x0, -a, z0 + a), gp_Pnt(x1, a, z1 - a)).Shape()
+    ends = [BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x0, 0.0, z), gp_Dir(1.0, 0.0, 0.0)), a, x1 - x0).Shape()
+            for z in (z0 + a, z1 - a)]
+    return _boolean("fuse", box, ends)
+
+
+def _fill_voids(shape: Any) -> tuple[Any, float]:
+    """``shape`` as the solid of its outer shell, and the volume of the closed voids dropped
+    (mm^3): a datum slot an end covers, as :func:`prs_geom.mesh.parts.union_pieces` fills it."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid
+    from OCP.BRepClass3d import BRepClass3d
+    from OCP.TopAbs import TopAbs_SHELL, TopAbs_SOLID
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    from prs_geom.checks.brep import count_subshapes, shape_volume
+
+    if count_subshapes(shape, TopAbs_SOLID) != 1 or count_subshapes(shape, TopAbs_SHELL) == 1:
+        return shape, 0.0
+    ex = TopExp_Explorer(shape, TopAbs_SOLID)
+    outer = BRepBuilderAPI_MakeSolid(BRepClass3d.OuterShell_s(TopoDS.Solid_s(ex.Current()))).Solid()
+    return outer, shape_volume(outer) - shape_volume(shape)
+
+
+def _complete_screw_closed_form(thread_exact: float | None, prof: "ThreadProfile", lay: Any,
+                                run_outs: Sequence[Any]) -> float | None:
+    """Exact volume (mm^3) of the complete screw: the thread body's closed form (None for a
+    graded thread: then None), each wheel exit's (:func:`prs_geom.mesh.thread.run_out_volume`),
+    the end steps' cylinders, less the keyway (:func:`prs_geom.mesh.volumes.keyway_volume`)
+    or the flat (a circular segment times its length)."""
+    from prs_geom.mesh.actuator import drive_journal_radius
+    from prs_geom.mesh.thread import run_out_volume
+    from prs_geom.mesh.volumes import keyway_volume
+
+    if thread_exact is None:
+        return None
+    total = thread_exact + sum(run_out_volume(prof, ro) for ro in run_outs)
+    for end in lay.ends:
+        total += sum(math.pi * (0.5 * st.diameter_mm) ** 2 * (st.z[1] - st.z[0]) for st in end.steps)
+        if end.key_z is None:
+            continue
+        r_j, length = drive_journal_radius(end), end.key_z[1] - end.key_z[0]
+        if end.key is not None:
+            total -= keyway_volume(r_j, end.key.width_mm, end.key.shaft_depth_mm, length)
+        else:
+            x0 = r_j - end.flat_depth_mm
+            total -= length * (r_j ** 2 * math.acos(x0 / r_j) - x0 * math.sqrt(r_j ** 2 - x0 ** 2))
+    return total
+
+
+def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3: float,
+                         screw_profile: "ThreadProfile | None" = None) -> StepSolid:
+    """The complete screw as one B-rep solid: the thread body ``thread`` (:func:`step_solid`,
+    screw frame) united with the grinding-wheel exits and both screw ends of the actuator
+    (:mod:`prs_geom.geometry.actuator`), the drive journal's keyway or flat cut, all exact
+    (planes, cylinders, cones; OpenCascade booleans). ``thread`` itself when the design has no
+    actuator or the thread body is not valid.
+
+    The solids are those of the complete screw's mesh (:mod:`prs_geom.mesh.parts`):
+    the wheel exit is the frustum of :func:`prs_geom.mesh.thread.apply_run_outs` (root less
+    its margin at the run-out's inner end to the crest less its gap in the end plane), the
+    ends the steps revolved (:func:`prs_geom.mesh.actuator.screw_end_profile`; the run-out
+    cylinder inside the thread's core adds nothing to the union and is left out). The result
+    must be one valid solid within :data:`~prs_geom.checks.brep.COMPLETE_VOLUME_REL_LIMIT` of
+    ``mesh_volume_mm3``, the complete screw's mesh volume; the thread body's own checks
+    (analytic volume, B-spline deviation) stay in the fields taken from ``thread``.
+    ``screw_profile`` is the profile ``thread`` was built from (the design's nominal screw
+    when omitted).
+    """
+    require_ocp()
+    from prs_geom.geometry.actuator import actuator_layout
+    from prs_geom.geometry.profiles import ThreadProfiles
+    from prs_geom.mesh.assembly import design_run_outs
+    from prs_geom.mesh.thread import RUN_OUT_CREST_GAP_MM, RUN_OUT_ROOT_MARGIN_MM
+
+    lay = actuator_layout(design)
+    if lay is None or not thread.valid:
+        return thread
+    started = time.perf_counter()
+    z_lo, z_hi = thread.bbox[2], thread.bbox[5]
+    prof = screw_profile or ThreadProfiles.from_design(design).screw
+    tools = []
+    exact = _complete_screw_closed_form(thread.analytic_volume_mm3, prof, lay, design_run_outs(design, "screw"))
+    for run_out in design_run_outs(design, "screw"):
+        z_end, inward = (z_lo, 1.0) if run_out.end == "lo" else (z_hi, -1.0)
+        r_end, r_in = prof.crest_radius - RUN_OUT_CREST_GAP_MM, prof.root_radius - RUN_OUT_ROOT_MARGIN_MM
+        z_in = z_end + inward * run_out.length_mm
+        tools.append(_revolved([(0.0, z_end), (r_end, z_end), (r_in, z_in), (0.0, z_in)]))
+    from prs_geom.mesh.actuator import screw_end_profile
+
+    for end in lay.ends:
+        solid = _revolved(screw_end_profile(end))
+        if end.key_z is not None:
+            solid = _boolean("cut", solid, [_drive_cutter(end)])
+        tools.append(solid)
+    try:
+        shape, filled = _fill_voids(_boolean("fuse", thread.shape, tools))
+        measured = measure_solid(shape)
+    except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
+        reason = f"OpenCascade failed on the complete screw: {type(exc).__name__}: {exc}"
+        return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
+    problems = complete_solid_problems(measured, mesh_volume_mm3)
+    if exact is not None and (closed := closed_form_volume_problem(measured, exact)):
+        problems.append(closed)
+    reason = "; ".join(problems)
+    volume = measured.volume_mm3
+    return dataclasses.replace(
+        thread, shape=shape, valid=not reason, reason=reason, volume_mm3=volume, mesh_volume_mm3=mesh_volume_mm3,
+        volume_rel_diff=(volume - mesh_volume_mm3) / mesh_volume_mm3, bbox=occ_bbox(shape), faces=measured.faces,
+        build_time_s=thread.build_time_s + time.perf_counter() - started, analytic_volume_mm3=exact,
+        design_mesh_volume_mm3=mesh_volume_mm3, max_tolerance_mm=measured.max_tolerance_mm,
+        complete=True, thread_volume_mm3=thread.volume_mm3, thread_analytic_volume_mm3=thread.analytic_volume_mm3,
+        filled_voids_mm3=filled)

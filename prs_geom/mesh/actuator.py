@@ -43,8 +43,8 @@ from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, _circle, _extruded, _trimesh, segments
 from prs_geom.model.design import PRSDesign
 
-__all__ = ["FLANGE_OVERLAP_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "RingEnvelope", "actuator_meshes",
-           "actuator_part_names", "purchased_envelopes"]
+__all__ = ["FLANGE_OVERLAP_MM", "PAD_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "RingEnvelope", "actuator_meshes",
+           "actuator_part_names", "drive_journal_radius", "purchased_envelopes", "screw_end_profile"]
 
 #: The run-out cylinder of a screw end stays this far (mm) inside the screw's root radius, or
 #: the chord tolerance when that is coarser: the thread mesh's root facets sag inside the root
@@ -57,7 +57,8 @@ SHAFT_RING_RIM_MM = 1.5
 #: overlap instead of meeting in one (differently sampled) cylinder.
 FLANGE_OVERLAP_MM = 0.5
 #: Cutters overshoot the faces they open by this much (mm), so no cut face is coplanar.
-_PAD_MM = 1.0
+PAD_MM = 1.0
+_PAD_MM = PAD_MM
 
 
 @dataclass(frozen=True)
@@ -155,22 +156,38 @@ def actuator_meshes(design: PRSDesign, lay: ActuatorLayout,
     return out
 
 
+def screw_end_profile(end: ScrewEnd, r_run_out: float | None = None) -> list[tuple[float, float]]:
+    """The (r, z) outline (mm) a screw end is revolved from: up the outside in z order, then
+    back down the axis (counter-clockwise in the (r, z) plane). With ``r_run_out`` the run-out
+    span is a cylinder of that radius (the mesh's overlap with the thread body); without, the
+    steps alone (the run-out cylinder lies inside the thread's core, so a union does not
+    need it)."""
+    pieces = [(st.z[0], st.z[1], 0.5 * st.diameter_mm) for st in end.steps]
+    if r_run_out is not None:
+        pieces.append((end.run_out[0], end.run_out[1], r_run_out))
+    pieces.sort()
+    return [(0.0, pieces[0][0])] + [pt for z0, z1, r in pieces for pt in ((r, z0), (r, z1))] + [(0.0, pieces[-1][1])]
+
+
+def drive_journal_radius(end: ScrewEnd) -> float:
+    """Radius (mm) of the step the drive's key span ``end.key_z`` lies on (the end must have
+    one)."""
+    assert end.key_z is not None
+    journal = next(st for st in end.steps if st.z[0] - 1e-9 <= end.key_z[0] and end.key_z[1] <= st.z[1] + 1e-9)
+    return 0.5 * journal.diameter_mm
+
+
 def _screw_end(end: ScrewEnd, r_run_out: float, tol: float):
     """The manifold3d solid of one screw end: the run-out cylinder and the steps revolved as
     one (r, z) profile, less the drive journal's keyway or flat."""
     import manifold3d
 
-    pieces = sorted([(end.run_out[0], end.run_out[1], r_run_out)]
-                    + [(st.z[0], st.z[1], 0.5 * st.diameter_mm) for st in end.steps])
-    # up the outside in z order, then back down the axis: counter-clockwise in the (r, z) plane
-    prof = [(0.0, pieces[0][0])] + [pt for z0, z1, r in pieces for pt in ((r, z0), (r, z1))] + [(0.0, pieces[-1][1])]
-    n = segments(max(r for _, _, r in pieces), tol)
+    prof = screw_end_profile(end, r_run_out)
+    n = segments(max(r for r, _ in prof), tol)
     solid = manifold3d.CrossSection([np.asarray(prof, dtype=np.float64)]).revolve(n)
     if end.key_z is None:
         return solid
-    # the drive journal: the step the key span lies on
-    journal = next(st for st in end.steps if st.z[0] - 1e-9 <= end.key_z[0] and end.key_z[1] <= st.z[1] + 1e-9)
-    r_j = 0.5 * journal.diameter_mm
+    r_j = drive_journal_radius(end)
     if end.key is not None:
         return solid - _keyway_cutter(r_j, end.key.width_mm, end.key.shaft_depth_mm, end.key_z, tol)
     assert end.flat_depth_mm is not None

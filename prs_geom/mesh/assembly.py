@@ -184,6 +184,10 @@ class Assembly:
             self._complete = complete_parts(self)
         return self._complete
 
+    def complete_part(self, name: str) -> Any:
+        """The complete part ``name`` (``screw``, ``roller``, ...) of :meth:`complete_parts`."""
+        return self.complete_parts()[name]
+
     def scene(self) -> trimesh.Scene:
         sc = trimesh.Scene()
         for name, (mesh, T, _) in self.placed.items():
