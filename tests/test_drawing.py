@@ -278,9 +278,16 @@ def test_mechanism_drawings_dimension_the_layout(drawings):
         assert doc.header["$INSUNITS"] == 4
     dims = _dims(carrier)
     fit = lay.journal_fit
-    assert dims["%%c<> outside"].get_measurement() == pytest.approx(2 * lay.carrier_outer_radius_mm, abs=1e-9)
-    assert dims["%%c<> bore"].get_measurement() == pytest.approx(2 * lay.carrier_inner_radius_mm, abs=1e-9)
-    assert dims["%%c<> journal bores"].get_measurement() == pytest.approx(fit.nominal_diameter_mm, abs=1e-9)
+    assert dims["<> outside"].get_measurement() == pytest.approx(2 * lay.carrier_outer_radius_mm, abs=1e-9)
+    assert dims["<> bore"].get_measurement() == pytest.approx(2 * lay.carrier_inner_radius_mm, abs=1e-9)
+    assert dims["<> journal bores"].get_measurement() == pytest.approx(fit.nominal_diameter_mm, abs=1e-9)
+    # every drawn dimension text carries at most one diameter sign (a DIAMETER dimension adds
+    # its own before the measurement; the verify kit found "%%c%%c40.5000 outside")
+    for doc in (carrier, nut_end):
+        for dim in (e for e in doc.modelspace() if e.dxftype() == "DIMENSION"):
+            texts = [t.plain_text() if t.dxftype() == "MTEXT" else t.dxf.text
+                     for t in dim.get_geometry_block() if t.dxftype() in ("MTEXT", "TEXT")]
+            assert all(t.count("%%c") + t.count("\u2300") + t.count("\u00d8") <= 1 for t in texts), texts
     assert dims["<> thickness"].get_measurement() == pytest.approx(lay.carrier_thickness_mm, abs=1e-9)
     assert dims["%%c<> pitch circle"].get_measurement() == pytest.approx(2 * lay.centre_distance_mm, abs=1e-9)
     # z bores on the centre-distance circle

@@ -132,16 +132,17 @@ def carrier_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
         c, si = math.cos(math.radians(ang)), math.sin(math.radians(ang))
         msp.add_line((-(R + 4 * k) * c, -(R + 4 * k) * si), ((R + 4 * k) * c, (R + 4 * k) * si),
                      dxfattribs={"layer": "CENTER", "ltscale": 2.0 * k})
-    msp.add_diameter_dim(center=(0.0, 0.0), radius=R, angle=135.0, text="%%c<> outside", override=ov,
+    # a DIAMETER dimension writes its own diameter sign before <> (a "%%c" here doubled it)
+    msp.add_diameter_dim(center=(0.0, 0.0), radius=R, angle=135.0, text="<> outside", override=ov,
                          dxfattribs={"layer": "DIMENSIONS"}).render()
-    msp.add_diameter_dim(center=(0.0, 0.0), radius=r_in, angle=225.0, text="%%c<> bore", override=ov,
+    msp.add_diameter_dim(center=(0.0, 0.0), radius=r_in, angle=225.0, text="<> bore", override=ov,
                          dxfattribs={"layer": "DIMENSIONS"}).render()
     fit = lay.journal_fit
     hole = fit.fit.split("/")[0]
     # the bore is drawn and dimensioned at its nominal size; the zone is in the notes (labels
     # carry no digits, so a reader finds the dimension's value as the first number)
     msp.add_diameter_dim(center=(a, 0.0), radius=0.5 * fit.nominal_diameter_mm, angle=60.0,
-                         text="%%c<> journal bores", override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
+                         text="<> journal bores", override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
     # section through roller 0's bore (psi = 0) to the right: X axial, Y radial (upper half
     # through the bore, lower half at psi = 180 deg)
     x0 = R + gap
