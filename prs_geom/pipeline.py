@@ -184,7 +184,8 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
     * ``screw_thread``, ``roller_thread``, ``nut_thread``: the thread bodies alone in the
       same frames (face A, datum A, at z = 0 of the roller and the nut).
     * every placed piece of the assembly (``roller_0`` ..., ``roller_0_gear_lo``, ...) in
-      the screw frame.
+      the screw frame, but for a piece named as its part (an actuator's ``locknut`` and
+      ``shaft_ring``), which stays the part in its own frame.
 
     ``tol`` is the chord tolerance (mm; the design's by default).
 
@@ -205,7 +206,8 @@ def build_meshes(design: PRSDesign, tol: float | None = None) -> dict[str, "trim
            for name, part in asm.complete_parts().items()}
     out.update({f"{name}_thread": tm.to_trimesh() for name, tm in asm.parts.items()})
     for name in asm.placed:
-        if name not in ("screw", "nut"):
+        # a one-piece part (the locknut, the shaft ring) keeps its own frame under its name
+        if name not in out:
             out[name] = asm.placed_mesh(name)
     return out
 
@@ -496,7 +498,9 @@ def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     solids = [step_solid(d, part, screw_profile=screw_profile) for part in ("screw", "roller", "nut")]
     # the screw with its wheel exits and ends (exact solids of revolution, fast booleans); the
     # roller's gear zones and the nut's ring gears are not yet (docs/step.md)
-    solids[0] = complete_screw_solid(d, solids[0], asm.complete_part("screw").volume_mm3, screw_profile)
+    screw = asm.complete_part("screw")
+    bounds = np.stack([screw.vertices.min(axis=0), screw.vertices.max(axis=0)])
+    solids[0] = complete_screw_solid(d, solids[0], screw.volume_mm3, screw_profile, bounds)
     # the carrier and the ring (when the design has them) as exact B-reps
     solids += [mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])
                for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]

@@ -248,6 +248,7 @@ def test_every_default_size_names_its_rule():
     ("actuator.fixed_end.bearing_bore_mm", 21.0, "has no bearing bore of 21 mm"),
     ("actuator.fixed_end.locknut_thread_mm", 25.0, "must be a KM locknut thread not above the bearing bore"),
     ("actuator.drive.diameter_mm", 19.0, "must be below the locknut thread's minor diameter"),
+    ("actuator.drive.key_length_mm", 4.0, "must exceed the key width 5 mm"),
     ("actuator.nut_mount.flange_thickness_mm", 20.0, "must fit on the lower nut end"),
     ("screw.length_mm", 150.0, "must be at least 201.5 mm for this actuator"),
 ])

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import prs_geom as pg
@@ -101,3 +102,9 @@ def test_build_meshes_are_the_part_files(tmp_path):
     for part in ("screw", "roller", "nut"):
         assert meshes[f"{part}_thread"].volume < 0.9 * meshes[part].volume, part
     assert {"roller_0", "roller_0_gear_lo", "nut_ring_gear_hi"} <= set(meshes)
+    # every complete part in its own frame, as its entry in the assembly's report section
+    from prs_geom.mesh.assembly import build_assembly
+
+    for name, part in build_assembly(d, screw_profile=pg.analyse(d).contact.screw_profile).complete_parts().items():
+        np.testing.assert_allclose(meshes[name].bounds, [part.vertices.min(axis=0), part.vertices.max(axis=0)],
+                                   atol=1e-9, err_msg=name)

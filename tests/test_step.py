@@ -378,6 +378,10 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
         back = read_step(tmp_path / "out" / f"{part}.step")
         assert back.names == (part,) and all(brep_valid(s) for s in back.shapes)
     _check_step_assembly(tmp_path / "out", report)
+    # the actuator's screw is complete; the roller and the nut are their thread bodies
+    assert report["step"]["parts"]["screw"]["complete"] is True
+    shapes = {p: row["shape"] for p, row in report["step"]["assembly"]["products"].items()}
+    assert shapes["screw"] == "solid" and shapes["roller"] == shapes["nut"] == "thread body"
     # the mechanism parts are exact B-reps: volume read back = the closed form of the true
     # circles (docs/theory/mechanism.md), which their polygon meshes approach within 0.1 %
     from prs_geom.checks.brep import shape_volume
@@ -490,7 +494,8 @@ def test_a_step_write_that_fails_midway_leaves_no_file(ocp, tmp_path, monkeypatc
 
 # --------------------------------------------------------------------------- complete screw
 @pytest.mark.heavy
-def test_complete_screw_is_one_solid_of_its_closed_form(ocp, heavy_scale):
+@pytest.mark.parametrize("variant", ["key", "flat-free-end"])
+def test_complete_screw_is_one_solid_of_its_closed_form(ocp, heavy_scale, variant):
     """The actuator's screw as one B-rep (issue 32): the thread body united with the wheel
     exits and both ends, the keyway cut. One valid solid; its volume equals the sum of closed
     forms (thread, run-outs, end cylinders, keyway) within 1e-4 and the complete mesh's within
@@ -510,13 +515,19 @@ def test_complete_screw_is_one_solid_of_its_closed_form(ocp, heavy_scale):
     from prs_geom.model.design import MeshSettings, Thread
 
     d = default_design()
+    a = d.actuator
+    if variant != "key":       # the drive journal with a flat, the floating end left free
+        a = dataclasses.replace(a, drive=dataclasses.replace(a.drive, kind="flat"),
+                                floating_end=dataclasses.replace(a.floating_end, enabled=False))
+    d = d.with_changes(actuator=a)
     if heavy_scale != "full":
         d = d.with_changes(thread=Thread(engaged_teeth=6), mesh=MeshSettings(chord_tolerance_mm=0.02),
-                           actuator=dataclasses.replace(d.actuator, stroke_mm=10.0))
+                           actuator=dataclasses.replace(a, stroke_mm=10.0))
     sp = theoretical_screw(d).profile
     mesh = build_assembly(d, screw_profile=sp).complete_parts()["screw"]
     thread = step_solid(d, "screw", screw_profile=sp)
-    s = complete_screw_solid(d, thread, mesh.volume_mm3, sp)
+    bounds = np.stack([mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)])
+    s = complete_screw_solid(d, thread, mesh.volume_mm3, sp, bounds)
     assert s.valid and s.complete, s.reason
     assert brep_valid(s.shape)
     assert s.analytic_volume_mm3 is not None
@@ -524,20 +535,31 @@ def test_complete_screw_is_one_solid_of_its_closed_form(ocp, heavy_scale):
     assert abs(s.volume_mm3 - mesh.volume_mm3) <= 2e-3 * mesh.volume_mm3
     assert s.volume_mm3 > 1.15 * thread.volume_mm3             # the ends are there
     lay = actuator_layout(d)
-    drive = next(e for e in lay.ends if e.key is not None)
+    drive = next(e for e in lay.ends if e.key_z is not None)
+    assert (drive.key is None) == (variant != "key")
+    assert all(e.steps for e in lay.ends) == (variant == "key")
     r_j = drive_journal_radius(drive)
     z0, z1 = drive.key_z
-    journal = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0 - 1.0), gp_Dir(0.0, 0.0, 1.0)), r_j,
-                                       z1 - z0 + 2.0).Shape()
-    removed = shape_volume(BRepAlgoAPI_Common(journal, _drive_cutter(drive)).Shape())
-    assert keyway_volume(r_j, drive.key.width_mm, drive.key.shaft_depth_mm, z1 - z0) == pytest.approx(removed, rel=1e-9)
+    floor = r_j - (drive.key.shaft_depth_mm if drive.key is not None else drive.flat_depth_mm)
+    if drive.key is not None:
+        journal = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0 - 1.0), gp_Dir(0.0, 0.0, 1.0)), r_j,
+                                           z1 - z0 + 2.0).Shape()
+        removed = shape_volume(BRepAlgoAPI_Common(journal, _drive_cutter(drive)).Shape())
+        # an independent quadrature of the same integral (scipy, adaptive)
+        from scipy.integrate import dblquad
+        half, b2 = 0.5 * (z1 - z0), 0.5 * drive.key.width_mm
+        depth = lambda y, z: math.sqrt(r_j ** 2 - y ** 2) - floor
+        zlim = lambda y: half - b2 + math.sqrt(max(b2 ** 2 - y ** 2, 0.0))
+        quad = dblquad(lambda z, y: depth(y, z), -b2, b2, lambda y: -zlim(y), zlim, epsabs=1e-12, epsrel=1e-12)[0]
+        k = keyway_volume(r_j, drive.key.width_mm, drive.key.shaft_depth_mm, z1 - z0)
+        assert k == pytest.approx(removed, rel=1e-9) and k == pytest.approx(quad, rel=1e-9)
     # each step's radius, probed on -y (away from the keyway on +x) at the middle of the step
     for end in lay.ends:
         for st in end.steps:
             zm, r = 0.5 * (st.z[0] + st.z[1]), 0.5 * st.diameter_mm
             assert classify(s.shape, (0.0, -(r - 1e-4), zm)) == "IN"
             assert classify(s.shape, (0.0, -(r + 1e-4), zm)) == "OUT"
-    # and the keyway floor at r_j - t1 on +x
+    # and the keyway's floor at r_j - t1 (the flat's at r_j - its depth) on +x
     zm = 0.5 * (z0 + z1)
-    assert classify(s.shape, (r_j - drive.key.shaft_depth_mm - 1e-4, 0.0, zm)) == "IN"
-    assert classify(s.shape, (r_j - drive.key.shaft_depth_mm + 1e-4, 0.0, zm)) == "OUT"
+    assert classify(s.shape, (floor - 1e-4, 0.0, zm)) == "IN"
+    assert classify(s.shape, (floor + 1e-4, 0.0, zm)) == "OUT"

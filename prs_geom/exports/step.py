@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.thread import ThreadMesh
     from prs_geom.model.design import PRSDesign
 
-__all__ = ["AUTHORITY_NOTE", "complete_screw_solid", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
+__all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "complete_screw_solid", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
            "StepFileContent", "StepSolid", "mechanism_step_solid", "read_step", "require_ocp", "step_solid",
            "write_solids", "write_step"]
 
@@ -791,6 +791,10 @@ def mechanism_step_solid(design: "PRSDesign", part: str, mesh: Any = None) -> St
 
 
 # --------------------------------------------------------------------------- complete screw
+#: A complete part's B-rep bounding box against its mesh's (mm): the meshes' polygons lie on
+#: or inside the true circles by at most their chord tolerance.
+BBOX_MESH_LIMIT_MM = 0.05
+
 def _revolved(profile: Sequence[tuple[float, float]]):
     """The solid of revolution about z of the closed (r, z) polygon ``profile`` (mm): planes,
     cylinders and cones, exact."""
@@ -892,7 +896,8 @@ def _complete_screw_closed_form(thread_exact: float | None, prof: "ThreadProfile
 
 
 def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3: float,
-                         screw_profile: "ThreadProfile | None" = None) -> StepSolid:
+                         screw_profile: "ThreadProfile | None" = None,
+                         mesh_bounds: Any = None) -> StepSolid:
     """The complete screw as one B-rep solid: the thread body ``thread`` (:func:`step_solid`,
     screw frame) united with the grinding-wheel exits and both screw ends of the actuator
     (:mod:`prs_geom.geometry.actuator`), the drive journal's keyway or flat cut, all exact
@@ -908,11 +913,15 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
     ``mesh_volume_mm3``, the complete screw's mesh volume; the thread body's own checks
     (analytic volume, B-spline deviation) stay in the fields taken from ``thread``.
     ``screw_profile`` is the profile ``thread`` was built from (the design's nominal screw
-    when omitted).
+    when omitted). ``mesh_bounds`` ((2, 3): min and max corner, mm), when given, the complete
+    mesh's extent: the B-rep's bounding box must agree within :data:`BBOX_MESH_LIMIT_MM`.
+    A free end (no steps) adds nothing. When OpenCascade fails, the result is not valid and
+    has no shape (the build then writes no ``screw.step`` and says why).
     """
     require_ocp()
     from prs_geom.geometry.actuator import actuator_layout
     from prs_geom.geometry.profiles import ThreadProfiles
+    from prs_geom.mesh.actuator import screw_end_profile
     from prs_geom.mesh.assembly import design_run_outs
     from prs_geom.mesh.thread import RUN_OUT_CREST_GAP_MM, RUN_OUT_ROOT_MARGIN_MM
 
@@ -924,32 +933,41 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
     prof = screw_profile or ThreadProfiles.from_design(design).screw
     tools = []
     exact = _complete_screw_closed_form(thread.analytic_volume_mm3, prof, lay, design_run_outs(design, "screw"))
-    for run_out in design_run_outs(design, "screw"):
-        z_end, inward = (z_lo, 1.0) if run_out.end == "lo" else (z_hi, -1.0)
-        r_end, r_in = prof.crest_radius - RUN_OUT_CREST_GAP_MM, prof.root_radius - RUN_OUT_ROOT_MARGIN_MM
-        z_in = z_end + inward * run_out.length_mm
-        tools.append(_revolved([(0.0, z_end), (r_end, z_end), (r_in, z_in), (0.0, z_in)]))
-    from prs_geom.mesh.actuator import screw_end_profile
-
-    for end in lay.ends:
-        solid = _revolved(screw_end_profile(end))
-        if end.key_z is not None:
-            solid = _boolean("cut", solid, [_drive_cutter(end)])
-        tools.append(solid)
     try:
+        for run_out in design_run_outs(design, "screw"):
+            z_end, inward = (z_lo, 1.0) if run_out.end == "lo" else (z_hi, -1.0)
+            r_end, r_in = prof.crest_radius - RUN_OUT_CREST_GAP_MM, prof.root_radius - RUN_OUT_ROOT_MARGIN_MM
+            z_in = z_end + inward * run_out.length_mm
+            tools.append(_revolved([(0.0, z_end), (r_end, z_end), (r_in, z_in), (0.0, z_in)]))
+        for end in lay.ends:
+            if not end.steps:             # a free end: the thread runs out into nothing
+                continue
+            solid = _revolved(screw_end_profile(end))
+            if end.key_z is not None:
+                solid = _boolean("cut", solid, [_drive_cutter(end)])
+            tools.append(solid)
         shape, filled = _fill_voids(_boolean("fuse", thread.shape, tools))
         measured = measure_solid(shape)
+        bbox = occ_bbox(shape)
     except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
         reason = f"OpenCascade failed on the complete screw: {type(exc).__name__}: {exc}"
         return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
+    if exact is not None:
+        exact += filled                   # a slot an end covers is filled, as in the mesh
     problems = complete_solid_problems(measured, mesh_volume_mm3)
     if exact is not None and (closed := closed_form_volume_problem(measured, exact)):
         problems.append(closed)
+    if mesh_bounds is not None:
+        # an end or the keyway in the wrong place keeps the volume; the extent shows it
+        off = float(np.max(np.abs(np.asarray(bbox) - np.asarray(mesh_bounds, dtype=float).ravel())))
+        if not off <= BBOX_MESH_LIMIT_MM:
+            problems.append(f"bounding box differs from the complete mesh's by {off:.3g} mm "
+                            f"(limit {BBOX_MESH_LIMIT_MM:g} mm)")
     reason = "; ".join(problems)
     volume = measured.volume_mm3
     return dataclasses.replace(
         thread, shape=shape, valid=not reason, reason=reason, volume_mm3=volume, mesh_volume_mm3=mesh_volume_mm3,
-        volume_rel_diff=(volume - mesh_volume_mm3) / mesh_volume_mm3, bbox=occ_bbox(shape), faces=measured.faces,
+        volume_rel_diff=(volume - mesh_volume_mm3) / mesh_volume_mm3, bbox=bbox, faces=measured.faces,
         build_time_s=thread.build_time_s + time.perf_counter() - started, analytic_volume_mm3=exact,
         design_mesh_volume_mm3=mesh_volume_mm3, max_tolerance_mm=measured.max_tolerance_mm,
         complete=True, thread_volume_mm3=thread.volume_mm3, thread_analytic_volume_mm3=thread.analytic_volume_mm3,

@@ -314,6 +314,9 @@ def _drive_feature(sz: _Sizer, dr, d_j: float, journal: tuple[float, float]
         key = key_for_shaft(d_j)
     except StandardTableError as exc:
         raise DesignError("actuator.drive.diameter_mm", d_j, str(exc)) from None
+    if not float(kl) > key.width_mm:
+        raise DesignError("actuator.drive.key_length_mm", kl, f"must exceed the key width {key.width_mm:g} mm "
+                          "(a form A key has two round ends of radius b / 2)")
     sz.sizes["actuator.drive.key"] = Sized(key.designation(float(kl)), f"DIN 6885-1 for a {d_j:g} mm shaft")
     return key, span, None
 
