@@ -147,16 +147,7 @@ def thread_solid_problems(measured: SolidMeasurement, mesh_volume_mm3: float, ma
     ``BRepCheck_Analyzer``, not one solid, volume off the reference mesh's by more than
     ``VOLUME_REL_LIMIT``, B-spline faces beyond the deviation target, OCC's faces not the
     fitted splines (beyond ``SURFACE_HANDOVER_SHARE`` x max(1, |z_lo|, |z_hi|))."""
-    problems = []
-    if not measured.analyzer_valid:
-        problems.append("BRepCheck_Analyzer rejects the shape")
-    if measured.solids != 1:
-        problems.append(f"{measured.solids} solids instead of one")
-    volume = measured.volume_mm3
-    rel = (volume - mesh_volume_mm3) / mesh_volume_mm3
-    if not abs(rel) <= VOLUME_REL_LIMIT:
-        problems.append(f"volume {volume:.6g} mm^3 differs from the mesh's {mesh_volume_mm3:.6g} mm^3 by "
-                        f"{100 * rel:.3g} % (limit {100 * VOLUME_REL_LIMIT:g} %)")
+    problems = _solid_near_mesh(measured, mesh_volume_mm3, VOLUME_REL_LIMIT, f"the mesh's {mesh_volume_mm3:.6g} mm^3")
     if not max_deviation_mm <= deviation_target_mm:
         problems.append(f"B-spline faces deviate {max_deviation_mm:.3g} mm from the analytic surface "
                         f"(limit {deviation_target_mm:.3g} mm)")
@@ -170,15 +161,23 @@ def complete_solid_problems(measured: SolidMeasurement, mesh_volume_mm3: float) 
     """What is wrong with a complete part's B-rep (the thread body united with its ends):
     rejected by ``BRepCheck_Analyzer``, not one solid, or a volume off the complete part's
     mesh (:mod:`prs_geom.mesh.parts`) by more than :data:`COMPLETE_VOLUME_REL_LIMIT`."""
+    return _solid_near_mesh(measured, mesh_volume_mm3, COMPLETE_VOLUME_REL_LIMIT,
+                            f"the complete part's mesh ({mesh_volume_mm3:.6g} mm^3)")
+
+
+def _solid_near_mesh(measured: SolidMeasurement, mesh_volume_mm3: float, limit: float, mesh_label: str) -> list[str]:
+    """The problems shared by every B-rep built against a mesh: rejected by
+    ``BRepCheck_Analyzer``, not one solid, volume off ``mesh_volume_mm3`` (named
+    ``mesh_label`` in the message) by more than ``limit`` (relative)."""
     problems = []
     if not measured.analyzer_valid:
         problems.append("BRepCheck_Analyzer rejects the shape")
     if measured.solids != 1:
         problems.append(f"{measured.solids} solids instead of one")
     rel = (measured.volume_mm3 - mesh_volume_mm3) / mesh_volume_mm3
-    if not abs(rel) <= COMPLETE_VOLUME_REL_LIMIT:
-        problems.append(f"volume {measured.volume_mm3:.6g} mm^3 differs from the complete part's mesh "
-                        f"({mesh_volume_mm3:.6g} mm^3) by {100 * rel:.3g} % (limit {100 * COMPLETE_VOLUME_REL_LIMIT:g} %)")
+    if not abs(rel) <= limit:
+        problems.append(f"volume {measured.volume_mm3:.6g} mm^3 differs from {mesh_label} by "
+                        f"{100 * rel:.3g} % (limit {100 * limit:g} %)")
     return problems
 
 

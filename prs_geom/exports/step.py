@@ -47,9 +47,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.thread import ThreadMesh
     from prs_geom.model.design import PRSDesign
 
-__all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "complete_screw_solid", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE", "STEP_SCHEMA", "read_document", "write_document",
-           "StepFileContent", "StepSolid", "mechanism_step_solid", "read_step", "require_ocp", "step_solid",
-           "write_solids", "write_step"]
+__all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE",
+           "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_screw_solid", "mechanism_step_solid",
+           "read_document", "read_step", "require_ocp", "step_solid", "write_document", "write_solids", "write_step"]
 
 PARTS = ("screw", "roller", "nut")
 #: The mechanism parts with a STEP file of their own (the journals and nut ends belong to the
@@ -795,6 +795,7 @@ def mechanism_step_solid(design: "PRSDesign", part: str, mesh: Any = None) -> St
 #: or inside the true circles by at most their chord tolerance.
 BBOX_MESH_LIMIT_MM = 0.05
 
+
 def _revolved(profile: Sequence[tuple[float, float]]):
     """The solid of revolution about z of the closed (r, z) polygon ``profile`` (mm): planes,
     cylinders and cones, exact."""
@@ -931,10 +932,11 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
     started = time.perf_counter()
     z_lo, z_hi = thread.bbox[2], thread.bbox[5]
     prof = screw_profile or ThreadProfiles.from_design(design).screw
+    run_outs = design_run_outs(design, "screw")
+    exact = _complete_screw_closed_form(thread.analytic_volume_mm3, prof, lay, run_outs)
     tools = []
-    exact = _complete_screw_closed_form(thread.analytic_volume_mm3, prof, lay, design_run_outs(design, "screw"))
     try:
-        for run_out in design_run_outs(design, "screw"):
+        for run_out in run_outs:
             z_end, inward = (z_lo, 1.0) if run_out.end == "lo" else (z_hi, -1.0)
             r_end, r_in = prof.crest_radius - RUN_OUT_CREST_GAP_MM, prof.root_radius - RUN_OUT_ROOT_MARGIN_MM
             z_in = z_end + inward * run_out.length_mm

@@ -141,7 +141,7 @@ def complete_parts(asm: Any) -> dict[str, CompletePart]:
             if key != key0:
                 raise ValueError(f"{body} is not a copy of {copies[0][0]}: its pieces or their placement differ")
         relative = copies[0][2]
-        V, F, voids = _union(relative)
+        V, F, voids = union_pieces([(mesh, R) for _, mesh, R in relative])
         transforms = np.stack([bodies[body][0][2] for body, _, _ in copies])
         out[name] = CompletePart(name=name, vertices=V, faces=F, volume_mm3=_volume(V, F),
                                  pieces=tuple(n for n, _, _ in relative),
@@ -154,10 +154,6 @@ def _volume(V: NDArray[np.float64], F: NDArray[np.int64]) -> float:
     """Signed volume of a closed triangle mesh (divergence theorem), mm^3."""
     a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
-
-
-def _union(relative: list[tuple[str, Any, NDArray[np.float64]]]) -> tuple[NDArray[np.float64], NDArray[np.int64], float]:
-    return union_pieces([(mesh, R) for _, mesh, R in relative])
 
 
 def union_pieces(pieces: list[tuple[Any, NDArray[np.float64]]]) -> tuple[NDArray[np.float64], NDArray[np.int64], float]:
