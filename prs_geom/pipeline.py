@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
+from numpy.typing import NDArray
 
 from prs_geom._version import __version__
 from prs_geom.analysis.contact import ContactResult, analyse_contact
@@ -485,6 +486,11 @@ def stage_meshes(ctx: BuildContext) -> None:
         _write_step_files(ctx, asm)
 
 
+def _bounds(part: Any) -> NDArray[np.float64]:
+    """The (2, 3) min and max corners of a complete part's mesh (mm)."""
+    return np.stack([part.vertices.min(axis=0), part.vertices.max(axis=0)])
+
+
 def _write_step_files(ctx: BuildContext, asm: Any) -> None:
     """``<part>.step`` per made part (one file each, named like its STL: the CAD habit) and
     ``assembly.step`` (:mod:`prs_geom.exports.step_assembly`) with every part placed."""
@@ -492,15 +498,16 @@ def _write_step_files(ctx: BuildContext, asm: Any) -> None:
                                        write_solids)
     from prs_geom.exports.step_assembly import (ASSEMBLY_FILE, assembly_files, envelope_shapes, product_labels,
                                                 write_step_assembly)
+    from prs_geom.exports.step_gears import complete_nut_solid, complete_roller_solid
 
     d = ctx.design
     screw_profile = ctx.results.contact.screw_profile
     solids = [step_solid(d, part, screw_profile=screw_profile) for part in ("screw", "roller", "nut")]
-    # the screw with its wheel exits and ends (exact solids of revolution, fast booleans); the
-    # roller's gear zones and the nut's ring gears are not yet (docs/step.md)
-    screw = asm.complete_part("screw")
-    bounds = np.stack([screw.vertices.min(axis=0), screw.vertices.max(axis=0)])
-    solids[0] = complete_screw_solid(d, solids[0], screw.volume_mm3, screw_profile, bounds)
+    # the complete parts, each checked against its complete mesh (docs/step.md)
+    screw, roller, nut = (asm.complete_part(part) for part in ("screw", "roller", "nut"))
+    solids[0] = complete_screw_solid(d, solids[0], screw.volume_mm3, screw_profile, _bounds(screw))
+    solids[1] = complete_roller_solid(d, solids[1], roller.volume_mm3, _bounds(roller))
+    solids[2] = complete_nut_solid(d, solids[2], nut.volume_mm3, _bounds(nut))
     # the carrier and the ring (when the design has them) as exact B-reps
     solids += [mechanism_step_solid(d, part, asm.placed[f"{part}_lo"][0])
                for part in MECHANISM_STEP_PARTS if f"{part}_lo" in asm.placed]

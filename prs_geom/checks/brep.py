@@ -20,8 +20,8 @@ from prs_geom.mesh.bspline_bands import evaluate_net
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.bspline_bands import BSplineNet
 
-__all__ = ["COMPLETE_VOLUME_REL_LIMIT", "REREAD_BBOX_TOLERANCE", "SURFACE_HANDOVER_SHARE", "VOLUME_REL_LIMIT", "SolidMeasurement",
-           "bbox_gap", "closed_form_volume_problem", "complete_solid_problems", "count_subshapes", "is_valid_shape", "measure_solid",
+__all__ = ["COMPLETE_VOLUME_REL_LIMIT", "GEAR_FACE_DEFLECTION_MM", "REREAD_BBOX_TOLERANCE", "SURFACE_HANDOVER_SHARE", "VOLUME_REL_LIMIT", "SolidMeasurement",
+           "bbox_gap", "closed_form_volume_problem", "complete_solid_problems", "count_subshapes", "gear_solid_volume", "is_valid_shape", "measure_solid",
            "occ_bbox", "reread_problems", "shape_volume", "surface_handover_error", "thread_solid_problems"]
 
 #: Largest relative volume difference B-rep vs reference mesh (or closed form) that counts as valid.
@@ -128,12 +128,52 @@ class SolidMeasurement:
     analyzer_valid: bool
 
 
-def measure_solid(shape: Any) -> SolidMeasurement:
-    """Volume, face and solid counts, largest tolerance and validity of ``shape``."""
+#: Deflection (mm) of the triangulation that measures the faces other than B-spline surfaces
+#: in :func:`gear_solid_volume`; the faces are planes, cylinders, cones and extruded gear
+#: outlines, whose volume a triangulation at this deflection misses by about 1e-5.
+GEAR_FACE_DEFLECTION_MM = 1e-3
+
+
+def gear_solid_volume(shape: Any, deflection_mm: float = GEAR_FACE_DEFLECTION_MM) -> float:
+    """Volume (mm^3) of a solid with extruded gear-outline faces: B-spline faces (the thread
+    bands) integrated exactly, every other face from a triangulation at ``deflection_mm``.
+
+    OpenCascade's integration misjudges a prism on a gear outline of interpolated flank
+    curves: the default ring gear (100 teeth, 4 mm) gives 2339.2, 2371.7 or 2385.9 mm^3 by
+    the rule chosen, against 2341.77 mm^3 from the outline's area times its height; triangulating
+    the non-B-spline faces gives 2341.85 at 1e-4 mm (measured). Triangulating the thread
+    bands too would cost 90 s on the nut; their exact integral is the one
+    :func:`shape_volume` verifies against closed forms to 1e-6.
+    """
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepGProp import BRepGProp
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.GeomAbs import GeomAbs_BSplineSurface
+    from OCP.GeomAdaptor import GeomAdaptor_Surface
+    from OCP.GProp import GProp_GProps
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    ex = TopExp_Explorer(shape, TopAbs_FACE)
+    while ex.More():
+        face = TopoDS.Face(ex.Current())
+        if GeomAdaptor_Surface(BRep_Tool.Surface_s(face)).GetType() != GeomAbs_BSplineSurface:
+            BRepMesh_IncrementalMesh(face, deflection_mm, False, 0.1, True)
+        ex.Next()
+    props = GProp_GProps()
+    # faces with a triangulation use it, the B-spline faces (none) their surfaces
+    BRepGProp.VolumeProperties_s(shape, props, False, False, True)
+    return float(props.Mass())
+
+
+def measure_solid(shape: Any, gears: bool = False) -> SolidMeasurement:
+    """Volume, face and solid counts, largest tolerance and validity of ``shape``;
+    ``gears``: the volume by :func:`gear_solid_volume` (a solid with gear faces)."""
     from OCP.ShapeAnalysis import ShapeAnalysis_ShapeTolerance
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SHAPE, TopAbs_SOLID
 
-    volume = shape_volume(shape)
+    volume = gear_solid_volume(shape) if gears else shape_volume(shape)
     faces = count_subshapes(shape, TopAbs_FACE)
     max_tol = ShapeAnalysis_ShapeTolerance().Tolerance(shape, 1, TopAbs_SHAPE)
     valid = is_valid_shape(shape)

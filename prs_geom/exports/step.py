@@ -48,12 +48,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.model.design import PRSDesign
 
 __all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE",
-           "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_screw_solid", "mechanism_step_solid",
+           "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_part_result", "complete_screw_solid", "mechanism_step_solid",
            "read_document", "read_step", "require_ocp", "step_solid", "write_document", "write_solids", "write_step"]
 
 PARTS = ("screw", "roller", "nut")
 #: The mechanism parts with a STEP file of their own (the journals and nut ends belong to the
-#: roller's and the nut's bodies, whose STEP solids are the threads).
+#: complete roller and nut, :mod:`prs_geom.exports.step_gears`).
 MECHANISM_STEP_PARTS = ("carrier", "retaining_ring")
 #: Install command named by :class:`EnvironmentFailure` when OCP is missing.
 INSTALL_HINT = 'pip install "prs-geom[step]"'
@@ -824,6 +824,7 @@ def _boolean(kind: str, shape: Any, tools: Sequence[Any]):
     op.SetArguments(args)
     op.SetTools(tls)
     op.SetRunParallel(True)
+    op.SetUseOBB(True)       # oriented boxes drop most face pairs before intersecting them
     op.Build()
     if not op.IsDone():
         raise RuntimeError(f"the {kind} of the complete part failed")
@@ -866,7 +867,7 @@ def _fill_voids(shape: Any) -> tuple[Any, float]:
     if count_subshapes(shape, TopAbs_SOLID) != 1 or count_subshapes(shape, TopAbs_SHELL) == 1:
         return shape, 0.0
     ex = TopExp_Explorer(shape, TopAbs_SOLID)
-    outer = BRepBuilderAPI_MakeSolid(BRepClass3d.OuterShell_s(TopoDS.Solid_s(ex.Current()))).Solid()
+    outer = BRepBuilderAPI_MakeSolid(BRepClass3d.OuterShell_s(TopoDS.Solid(ex.Current()))).Solid()
     return outer, shape_volume(outer) - shape_volume(shape)
 
 
@@ -950,7 +951,6 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
             tools.append(solid)
         shape, filled = _fill_voids(_boolean("fuse", thread.shape, tools))
         measured = measure_solid(shape)
-        bbox = occ_bbox(shape)
     except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
         reason = f"OpenCascade failed on the complete screw: {type(exc).__name__}: {exc}"
         return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
@@ -959,8 +959,20 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
     problems = complete_solid_problems(measured, mesh_volume_mm3)
     if exact is not None and (closed := closed_form_volume_problem(measured, exact)):
         problems.append(closed)
+    return complete_part_result(thread, shape, measured, problems, mesh_volume_mm3, mesh_bounds, exact, filled,
+                                started)
+
+
+def complete_part_result(thread: StepSolid, shape: Any, measured: Any, problems: list[str], mesh_volume_mm3: float,
+                         mesh_bounds: Any, exact: float | None, filled: float, started: float) -> StepSolid:
+    """``thread`` (a thread body's :class:`StepSolid`) turned into the complete part
+    ``shape``: its ``measured`` values, the ``problems`` found so far plus a bounding box
+    off the complete mesh's ``mesh_bounds`` ((2, 3), mm; not checked when None) by more than
+    :data:`BBOX_MESH_LIMIT_MM`, its closed form ``exact`` (None: none) and the filled voids
+    (mm^3); the thread body's own checks stay in the deviation and ``thread_*`` fields."""
+    bbox = occ_bbox(shape)
     if mesh_bounds is not None:
-        # an end or the keyway in the wrong place keeps the volume; the extent shows it
+        # an end, a keyway or a gear in the wrong place keeps the volume; the extent shows it
         off = float(np.max(np.abs(np.asarray(bbox) - np.asarray(mesh_bounds, dtype=float).ravel())))
         if not off <= BBOX_MESH_LIMIT_MM:
             problems.append(f"bounding box differs from the complete mesh's by {off:.3g} mm "

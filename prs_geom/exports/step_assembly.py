@@ -10,7 +10,8 @@ build item, so a CAD user gets the assembly as the analysis placed it, at mid-st
 nut's frame on the screw frame; ``stroke_position_mm`` 0 in the report, measured from the
 middle of the stroke).
 
-Shapes: the per-part B-rep solids of :mod:`prs_geom.exports.step` (the thread bodies, the
+Shapes: the per-part B-rep solids of :mod:`prs_geom.exports.step` and
+:mod:`prs_geom.exports.step_gears` (the complete screw, roller and nut or their thread bodies, the
 exact carrier and retaining ring) and, for a purchased part, its envelope as an exact ring
 (OpenCascade primitives). The product's colour is the part's display colour of the GLB
 (:data:`prs_geom.exports.scene.MATERIALS`, converted to sRGB). XCAF writes the file (AP214,
