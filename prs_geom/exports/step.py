@@ -48,7 +48,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.model.design import PRSDesign
 
 __all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE",
-           "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_part_result", "complete_screw_solid", "mechanism_step_solid",
+           "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_part_failed", "complete_part_result", "complete_screw_solid", "mechanism_step_solid",
            "read_document", "read_step", "require_ocp", "step_solid", "write_document", "write_solids", "write_step"]
 
 PARTS = ("screw", "roller", "nut")
@@ -330,25 +330,29 @@ def _slot(mark) -> tuple[Any, list]:
 
 
 
-def _band_faces(surfaces: Sequence, tm: "ThreadMesh") -> list:
+def _band_faces(surfaces: Sequence, tm: "ThreadMesh",
+                spans: Sequence[tuple[float, float, float]] | None = None) -> list:
     """One face per band surface and (at most) TURNS_PER_FACE turns, each on its own segment
     of the band's spline.
 
     A face on the whole surface would write all of it into the file once per face;
     tessellators (CAD viewers, BRepMesh) handle one-turn faces far better than 20-turn ones,
-    and the cut edges, the same iso-curve from both sides, sew exactly."""
+    and the cut edges, the same iso-curve from both sides, sew exactly. ``spans``: (z_a, z_b,
+    share) per piece of the part, each cut into faces of at most ``share`` x TURNS_PER_FACE
+    turns (the complete roller's gear zones); the whole part at share 1 when None."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
     from OCP.Geom import Geom_BSplineSurface
 
-    cuts = face_z_cuts(tm.z_lo, tm.z_hi, tm.profile.lead)
     faces = []
-    for surf in surfaces:
-        u0, u1 = surf.Bounds()[:2]
-        for za, zb in zip(cuts[:-1], cuts[1:]):
-            piece = Geom_BSplineSurface(surf)
-            if len(cuts) > 2:
-                piece.Segment(u0, u1, za, zb)
-            faces.append(BRepBuilderAPI_MakeFace(piece, 1e-7).Face())
+    for z_a, z_b, share in spans or ((tm.z_lo, tm.z_hi, 1.0),):
+        cuts = face_z_cuts(z_a, z_b, share * tm.profile.lead)
+        for surf in surfaces:
+            u0, u1 = surf.Bounds()[:2]
+            for za, zb in zip(cuts[:-1], cuts[1:]):
+                piece = Geom_BSplineSurface(surf)
+                if (za, zb) != (tm.z_lo, tm.z_hi):     # the surface is already cut to the part
+                    piece.Segment(u0, u1, za, zb)
+                faces.append(BRepBuilderAPI_MakeFace(piece, 1e-7).Face())
     return faces
 
 
@@ -952,8 +956,7 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
         shape, filled = _fill_voids(_boolean("fuse", thread.shape, tools))
         measured = measure_solid(shape)
     except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
-        reason = f"OpenCascade failed on the complete screw: {type(exc).__name__}: {exc}"
-        return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
+        return complete_part_failed(thread, "screw", exc)
     if exact is not None:
         exact += filled                   # a slot an end covers is filled, as in the mesh
     problems = complete_solid_problems(measured, mesh_volume_mm3)
@@ -961,6 +964,13 @@ def complete_screw_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3
         problems.append(closed)
     return complete_part_result(thread, shape, measured, problems, mesh_volume_mm3, mesh_bounds, exact, filled,
                                 started)
+
+
+def complete_part_failed(thread: StepSolid, part: str, exc: Exception) -> StepSolid:
+    """``thread`` marked not valid, without a shape, when OpenCascade failed on the complete
+    ``part`` (the build then writes no file for it and says why)."""
+    reason = f"OpenCascade failed on the complete {part}: {type(exc).__name__}: {exc}"
+    return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
 
 
 def complete_part_result(thread: StepSolid, shape: Any, measured: Any, problems: list[str], mesh_volume_mm3: float,

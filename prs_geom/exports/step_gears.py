@@ -27,7 +27,6 @@ reported as ``filled_voids_mm3``.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from typing import TYPE_CHECKING, Any, Sequence
@@ -36,9 +35,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom.checks.brep import complete_solid_problems, measure_solid
-from prs_geom.exports.step import (SEW_TOLERANCE, StepSolid, _body_face, _boolean, _circle_wire, _end_wire,
-                                   _occ_surface, _plane_face, _revolved, complete_part_result, require_ocp)
-from prs_geom.mesh.bspline_bands import face_z_cuts, fit_bands
+from prs_geom.exports.step import (StepSolid, _band_faces, _body_face, _boolean, _circle_wire, _end_wire,
+                                   _occ_cylinder, _occ_surface, _plane_face, _revolved, _sew_solid,
+                                   complete_part_failed, complete_part_result, require_ocp)
+from prs_geom.mesh.bspline_bands import fit_bands
+from prs_geom.mesh.mechanism_solids import Cylinder
 
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.geometry.gears import SpurGear
@@ -51,8 +52,9 @@ __all__ = ["TIP_CLEARANCE_MM", "ZONE_FACE_TURNS", "complete_nut_solid", "complet
 #: fragile), and beyond the crest the thread bounds the part, so the solid is the same.
 TIP_CLEARANCE_MM = 0.05
 #: Turns per thread face in a gear zone. The cut splits every face there into pieces, and the
-#: STEP writer writes a piece's whole surface with it: one-turn faces made a 75 MB
-#: roller.step; faces of 1/20 turn keep it small (docs/step.md).
+#: STEP writer writes a piece's whole surface with it; 1/20 turn instead of one took the
+#: default roller.step from 75 to 69 MB (the cut's intersection curves are most of the rest,
+#: docs/step.md).
 ZONE_FACE_TURNS = 0.05
 
 
@@ -136,11 +138,9 @@ def _prism(face: Any, z0: float, z1: float):
     return BRepPrimAPI_MakePrism(face, gp_Vec(0.0, 0.0, z1 - z0)).Shape()
 
 
-def _cylinder(radius: float, z0: float, z1: float):
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
-    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
-
-    return BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(0.0, 0.0, z0), gp_Dir(0.0, 0.0, 1.0)), radius, z1 - z0).Shape()
+def _cylinder(radius: float, z0: float, z1: float, x: float = 0.0, y: float = 0.0):
+    """The full cylinder of ``radius`` from z0 to z1 about the axis through (x, y) (mm)."""
+    return _occ_cylinder(Cylinder(radius=radius, height=z1 - z0, origin=(x, y, z0)))
 
 
 def _faces(shape: Any) -> list:
@@ -169,29 +169,12 @@ def _on_plane(face: Any, z: float) -> bool:
 
 
 def _sewn_solid(faces: Sequence[Any]):
-    """Sew ``faces`` into one outward solid, splitting edges where one face's edge runs
-    along pieces of several others (the joined end planes). Raises RuntimeError otherwise."""
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
-    from OCP.BRepLib import BRepLib
-    from OCP.TopAbs import TopAbs_SHELL
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopoDS import TopoDS
-
-    sew = BRepBuilderAPI_Sewing(SEW_TOLERANCE, True, True, True, False)
-    for f in faces:
-        sew.Add(f)
-    sew.Perform()
-    if sew.NbFreeEdges() or sew.NbMultipleEdges():
-        raise RuntimeError(f"sewing left {sew.NbFreeEdges()} free and {sew.NbMultipleEdges()} multiple edges")
-    shells, ex = [], TopExp_Explorer(sew.SewedShape(), TopAbs_SHELL)
-    while ex.More():
-        shells.append(TopoDS.Shell(ex.Current()))
-        ex.Next()
-    if len(shells) != 1:
-        raise RuntimeError(f"sewing gave {len(shells)} shells, not one")
-    solid = BRepBuilderAPI_MakeSolid(shells[0]).Solid()
-    if not BRepLib.OrientClosedSolid_s(solid):
-        raise RuntimeError("the sewn shell does not enclose a volume")
+    """:func:`~prs_geom.exports.step._sew_solid` (whose sewing splits edges where one face's
+    edge runs along pieces of several others: the joined end planes), raising RuntimeError
+    with its reason when the faces do not close into one solid."""
+    solid, reason = _sew_solid(list(faces))
+    if solid is None:
+        raise RuntimeError(reason)
     return solid
 
 
@@ -203,11 +186,6 @@ def _complete_result(thread: StepSolid, shape: Any, mesh_volume_mm3: float, mesh
     problems = complete_solid_problems(measured, mesh_volume_mm3)
     return complete_part_result(thread, shape, measured, problems, mesh_volume_mm3, mesh_bounds, None, filled_mm3,
                                 started)
-
-
-def _failed(thread: StepSolid, part: str, exc: Exception) -> StepSolid:
-    reason = f"OpenCascade failed on the complete {part}: {type(exc).__name__}: {exc}"
-    return dataclasses.replace(thread, valid=False, reason=reason, shape=None)
 
 
 def _geared(design: "PRSDesign", thread: StepSolid) -> tuple[Any, Any] | None:
@@ -226,12 +204,11 @@ def _geared(design: "PRSDesign", thread: StepSolid) -> tuple[Any, Any] | None:
 # --------------------------------------------------------------------------- roller
 def _long_roller_body(design: "PRSDesign", w: float, target_mm: float):
     """The roller's thread body over [-w, L + w] without a datum slot (faces cut at the gear
-    faces z = 0 and z = L), and its datum slot's volume (mm^3)."""
+    faces z = 0 and z = L, :data:`ZONE_FACE_TURNS` long in the gear zones), its profile and
+    its thread length L (mm)."""
     from prs_geom.geometry.profiles import ThreadProfiles
     from prs_geom.mesh.assembly import FIRST_MID_PITCHES, part_warps, thread_length
     from prs_geom.mesh.thread import part_chord_tolerance, thread_mesh
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
-    from OCP.Geom import Geom_BSplineSurface
 
     prof = ThreadProfiles.from_design(design).roller
     L = thread_length(design)
@@ -239,15 +216,7 @@ def _long_roller_body(design: "PRSDesign", w: float, target_mm: float):
                      FIRST_MID_PITCHES["roller"] * design.thread.pitch_mm, part_warps(design)["roller"])
     fit = fit_bands(tm, target_mm)
     surfaces = [_occ_surface(n, prof.hand_sign < 0, tm.z_lo, tm.z_hi) for n in fit.nets]
-    faces = []
-    for za, zb, turn in ((-w, 0.0, ZONE_FACE_TURNS), (0.0, L, 1.0), (L, L + w, ZONE_FACE_TURNS)):
-        cuts = face_z_cuts(za, zb, turn * prof.lead)
-        for surf in surfaces:
-            u0, u1 = surf.Bounds()[:2]
-            for a, b in zip(cuts[:-1], cuts[1:]):
-                piece = Geom_BSplineSurface(surf)
-                piece.Segment(u0, u1, a, b)
-                faces.append(BRepBuilderAPI_MakeFace(piece, 1e-7).Face())
+    faces = _band_faces(surfaces, tm, ((-w, 0.0, ZONE_FACE_TURNS), (0.0, L, 1.0), (L, L + w, ZONE_FACE_TURNS)))
     faces += [_plane_face(z, [_end_wire(surfaces, z)]) for z in (-w, L + w)]
     return _sewn_solid(faces), prof, L
 
@@ -296,7 +265,7 @@ def complete_roller_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm
         r_j = 0.5 * mech.journal_fit.shaft_diameter_mm
         shape = _boolean("fuse", shape, [_cylinder(r_j, *end.journal) for end in mech.ends])
     except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
-        return _failed(thread, "roller", exc)
+        return complete_part_failed(thread, "roller", exc)
     filled = datum_mark(prof, 0.0).volume      # the slot in face A, buried under the gear
     return _complete_result(thread, shape, mesh_volume_mm3, mesh_bounds, filled, started)
 
@@ -322,8 +291,6 @@ def _flange_solid(design: "PRSDesign", mech: Any) -> tuple[Any, tuple[float, flo
     its z span (mm); None without a flange mounting."""
     from prs_geom.geometry.actuator import actuator_layout
     from prs_geom.mesh.actuator import FLANGE_OVERLAP_MM
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
-    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
 
     lay = actuator_layout(design)
     if lay is None or lay.nut_mount.kind != "flange":
@@ -332,9 +299,8 @@ def _flange_solid(design: "PRSDesign", mech: Any) -> tuple[Any, tuple[float, flo
     z0, z1 = m.z
     r_bc = 0.5 * m.bolt_circle_diameter_mm
     angles = math.pi / m.bolt_count + 2.0 * math.pi * np.arange(m.bolt_count) / m.bolt_count
-    holes = [BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(r_bc * math.cos(a), r_bc * math.sin(a), z0 - 1.0),
-                                             gp_Dir(0.0, 0.0, 1.0)), 0.5 * m.bolt.clearance_hole_mm,
-                                      z1 - z0 + 2.0).Shape() for a in angles]
+    holes = [_cylinder(0.5 * m.bolt.clearance_hole_mm, z0 - 1.0, z1 + 1.0, r_bc * math.cos(a), r_bc * math.sin(a))
+             for a in angles]
     inner = _cylinder(mech.nut_end_outer_radius_mm - FLANGE_OVERLAP_MM, z0 - 1.0, z1 + 1.0)
     return _boolean("cut", _cylinder(0.5 * m.flange_diameter_mm, z0, z1), [inner] + holes), (z0, z1)
 
@@ -357,7 +323,6 @@ def complete_nut_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3: 
     geared = _geared(design, thread)
     if geared is None:
         return thread
-    from prs_geom.exports.step import _band_faces
     from prs_geom.geometry.gear_pair import ring_gear_outer_radius
     from prs_geom.mesh.bspline_bands import thread_solid_reference
 
@@ -385,5 +350,5 @@ def complete_nut_solid(design: "PRSDesign", thread: StepSolid, mesh_volume_mm3: 
             faces += _planar_difference(thread_end, rest_end) + _planar_difference(rest_end, thread_end)
         shape = _sewn_solid(faces)
     except Exception as exc:  # noqa: BLE001 - OCC raises its own Standard_Failure types
-        return _failed(thread, "nut", exc)
+        return complete_part_failed(thread, "nut", exc)
     return _complete_result(thread, shape, mesh_volume_mm3, mesh_bounds, tm.datum_mark.volume, started)
