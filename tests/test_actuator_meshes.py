@@ -12,6 +12,7 @@ import pytest
 from scipy.integrate import quad
 
 from prs_geom.checks.interference import body_pairs
+from prs_geom.exports.scene import moving_group
 from prs_geom.geometry.actuator import actuator_layout
 from prs_geom.geometry.mechanism import layout
 from prs_geom.mesh.actuator import RUN_OUT_INSET_MM, actuator_meshes
@@ -30,8 +31,10 @@ TOL = 0.01
 ROUND = 1e-8
 #: The actuator's scene parts of the default design, in their stated order.
 ACTUATOR_PARTS = ["screw_end_lo", "screw_end_hi", "nut_flange", "bearing_fixed_0", "bearing_fixed_1",
-                  "bearing_floating_0", "locknut", "shaft_ring"]
+                  "bearing_floating_0", "locknut", "shaft_ring", *(f"flange_bolt_{k}" for k in range(6)), "drive_key"]
 PURCHASED = ACTUATOR_PARTS[3:]
+#: The purchased parts modelled as rings about the screw axis.
+RINGS = ACTUATOR_PARTS[3:8]
 
 
 FOUR_START = Path(__file__).resolve().parents[1] / "examples" / "four-start-seven-rollers.toml"
@@ -87,7 +90,7 @@ def test_scene_order_rigid_bodies_and_the_design_without_actuator():
     d = default_design()
     names = scene_names(d, gears=True, mechanism=True)
     # after the retaining rings, in the stated order
-    assert names[-10:] == ["retaining_ring_lo", "retaining_ring_hi", *ACTUATOR_PARTS]
+    assert names[-2 - len(ACTUATOR_PARTS):] == ["retaining_ring_lo", "retaining_ring_hi", *ACTUATOR_PARTS]
     bodies = {n: Assembly.rigid_body(n) for n in ACTUATOR_PARTS}
     assert bodies == {"screw_end_lo": "screw", "screw_end_hi": "screw", "nut_flange": "nut",
                       **{n: n for n in PURCHASED}}
@@ -103,16 +106,21 @@ def test_scene_order_rigid_bodies_and_the_design_without_actuator():
 
 
 def test_default_assembly_places_the_actuator_parts_without_interference(default):
-    """Every actuator part placed with the identity; the parts that touch by design (a
-    bearing on its shoulder, the bearing pair, the locknut on the pair, the shaft ring on its
-    bearing) touch without volume: the check passes with them as contacts."""
+    """Every made actuator part placed with the identity, every purchased one by a rigid
+    transform of its own mesh; the parts that touch by design (a bearing on its shoulder, the
+    bearing pair, the locknut on the pair, the shaft ring on its bearing, each bolt head on
+    the flange, the key on its keyway's floor) touch without volume: the check passes with
+    them as contacts."""
     from prs_geom.checks.interference import check_assembly
 
     d, lay, asm = default
     for name in ACTUATOR_PARTS:
         mesh, T, kind = asm.placed[name]
         assert kind == "actuator" and mesh.is_watertight, name
-        if name in PURCHASED:
+        if name in PURCHASED and name not in RINGS:
+            # a bolt or the key: meshed once in its own frame, placed by a translation
+            assert np.array_equal(T[:3, :3], np.eye(3)) and np.array_equal(T[3], [0.0, 0.0, 0.0, 1.0]), name
+        elif name in PURCHASED:
             # meshed once per size in its own frame: a turn about the axis and a shift along it
             assert np.array_equal(T[2], [0.0, 0.0, 1.0, T[2, 3]]) and np.array_equal(T[:2, 2:], np.zeros((2, 2)))
             assert T[:2, :2] @ T[:2, :2].T == pytest.approx(np.eye(2), abs=1e-15), name
@@ -122,7 +130,8 @@ def test_default_assembly_places_the_actuator_parts_without_interference(default
     assert rep["found"] is False
     touching = {tuple(r["pair"]) for r in rep["contact_within_tolerance"]}
     assert {("bearing_fixed_0", "bearing_fixed_1"), ("bearing_fixed_1", "locknut"),
-            ("screw_end_lo", "bearing_fixed_0"), ("bearing_floating_0", "shaft_ring")} <= touching
+            ("screw_end_lo", "bearing_fixed_0"), ("bearing_floating_0", "shaft_ring"),
+            ("screw_end_lo", "drive_key"), *(("nut_flange", f"flange_bolt_{k}") for k in range(6))} <= touching
     for row in rep["contact_within_tolerance"]:
         if set(row["pair"]) & set(ACTUATOR_PARTS):
             assert row["volume_mm3"] < 1e-9, row
@@ -215,7 +224,7 @@ CATALOGUE = {"bearing_fixed_0": (10.0, 23.5, 14.0), "bearing_fixed_1": (10.0, 23
              "shaft_ring": (9.5, 10.0 + 1.5, 1.2)}
 
 
-@pytest.mark.parametrize("name", PURCHASED)
+@pytest.mark.parametrize("name", RINGS)
 def test_purchased_envelopes_have_the_catalogue_sizes(default, name):
     """Outside vertices on the outside circle, the bore's edges tangent to the bore circle
     (its vertices at most one chord tolerance beyond), the axial span as placed."""
@@ -232,6 +241,73 @@ def test_purchased_envelopes_have_the_catalogue_sizes(default, name):
     assert (z0, z1) == pytest.approx(placed[name], abs=ROUND)
     exact = math.pi * (r_out ** 2 - r_in ** 2) * width
     assert abs(mesh.volume - exact) <= MECHANISM_CHORD_MM * mesh.area
+
+
+def test_flange_bolts_stand_in_their_holes_with_heads_on_the_flange(default):
+    """ISO 4762 M5 x 16 (d_k 8.5, k = d = 5) as head and shank cylinders: the mesh's volume
+    against pi (r_s^2 l + r_h^2 k) within the chord tolerance times its area; each bolt's
+    axis through its hole's centre (bolt circle 65.5 mm, at 30, 90, ... deg), the shank clear
+    of the ISO 273 hole (5.5 mm), the head's underside on the flange's upper face, the tip l
+    below it."""
+    from prs_geom.mesh.actuator import flange_bolts
+
+    d, lay, asm = default
+    m = lay.nut_mount
+    bolts = flange_bolts(lay)
+    assert [b.designation for b in bolts] == ["ISO 4762 M5 x 16 - 8.8"] * 6
+    meshes = {id(asm.placed[b.name][0]) for b in bolts}
+    assert len(meshes) == 1                                   # one mesh, six placements
+    mesh = asm.placed["flange_bolt_0"][0]
+    exact = math.pi * (2.5 ** 2 * 16.0 + 4.25 ** 2 * 5.0)
+    assert bolts[0].volume_mm3 == pytest.approx(exact, rel=1e-15)
+    assert mesh.is_watertight and abs(mesh.volume - exact) <= MECHANISM_CHORD_MM * mesh.area
+    for k, b in enumerate(bolts):
+        V = asm.placed_mesh(b.name).vertices
+        a = math.radians(30.0 + 60.0 * k)
+        centre = 32.75 * np.array([math.cos(a), math.sin(a)])
+        r = np.hypot(*(V[:, :2] - centre).T)
+        shank = V[:, 2] < m.z[1] - 1e-9
+        assert r[shank].max() == pytest.approx(2.5, abs=ROUND) and r[shank].max() < 0.5 * 5.5
+        assert r.max() == pytest.approx(4.25, abs=ROUND)
+        head = V[~shank, 2]
+        assert (head.min(), head.max()) == pytest.approx((m.z[1], m.z[1] + 5.0), abs=ROUND)
+        assert V[:, 2].min() == pytest.approx(m.z[1] - 16.0, abs=ROUND)
+
+
+def test_drive_key_fills_its_keyway(default):
+    """DIN 6885 A 5 x 5 x 22 on the +x side: its mesh volume against ((l - b) b + pi b^2 / 4)
+    h; its bottom on the keyway floor (x = r_j - t1), its top h above, its span the key's;
+    the part below the journal surface is the keyway (the closed form of
+    test_screw_ends_against_the_closed_form). The key's outline lies inside the keyway's
+    polygon (staggered, prs_geom.mesh.actuator._stadium_prism), at most 2 chord tolerances
+    inside the true stadium: the bounds hold to that inset and the volumes to it times the
+    key's area;
+    key and screw end share no volume."""
+    from prs_geom.mesh.actuator import drive_key
+
+    d, lay, asm = default
+    end = lay.ends[0]
+    key = drive_key(lay)
+    assert key.designation == "DIN 6885 A 5 x 5 x 22" and key.designation == lay.sizes["actuator.drive.key"].value
+    mesh = asm.placed_mesh("drive_key")
+    exact = (17.0 * 5.0 + math.pi * 6.25) * 5.0
+    assert key.volume_mm3 == pytest.approx(exact, rel=1e-15)
+    assert mesh.is_watertight and abs(mesh.volume - exact) <= 2 * MECHANISM_CHORD_MM * mesh.area
+    r_j = 0.5 * end.steps[-1].diameter_mm
+    floor = r_j - end.key.shaft_depth_mm
+    lo, hi = mesh.bounds
+    assert (lo[0], hi[0]) == pytest.approx((floor, floor + 5.0), abs=ROUND)
+    # the outline staggered against the keyway's: within 2 chord tolerances inside the stadium
+    inset = 2 * MECHANISM_CHORD_MM
+    assert end.key_z[0] <= lo[2] <= end.key_z[0] + inset and end.key_z[1] - inset <= hi[2] <= end.key_z[1]
+    assert 2.5 - inset <= hi[1] <= 2.5 and -2.5 <= lo[1] <= -2.5 + inset
+    journal = manifold3d.Manifold.cylinder(end.key_z[1] - end.key_z[0] + 2.0, r_j, r_j,
+                                           4 * math.ceil(math.pi / math.acos(1 - 1e-5 / r_j) / 4)
+                                           ).translate((0.0, 0.0, end.key_z[0] - 1.0))
+    inside = (_solid(mesh) ^ journal).volume()
+    keyway = _keyway_volume(r_j, 5.0, end.key.shaft_depth_mm, 22.0)
+    assert abs(inside - keyway) <= 2 * MECHANISM_CHORD_MM * mesh.area, (inside, keyway)
+    assert (_solid(mesh) ^ _solid(asm.placed["screw_end_lo"][0])).volume() < 1e-9
 
 
 def test_nut_flange_holes_and_volume(default):
@@ -260,10 +336,11 @@ def test_nut_flange_holes_and_volume(default):
 @pytest.mark.parametrize("which", ["default", "four_start"])
 @pytest.mark.parametrize("stroke_end", [0, 1])
 def test_nut_assembly_at_the_stroke_ends_clears_the_screw(request, which, stroke_end):
-    """The nut assembly (nut, its ends and flange, ring gears, carriers, retaining rings,
-    rollers with gears and journals) moved by the stroke end's shift: no volume shared with
-    the screw (thread and ends; the screw-roller thread contact is a designed line contact,
-    checked elsewhere) nor with the bearings, locknut and shaft ring; and the screw runs
+    """The nut assembly (nut, its ends and flange, the flange bolts, ring gears, carriers,
+    retaining rings, rollers with gears and journals) moved by the stroke end's shift: no
+    volume shared with the screw (thread and ends; the screw-roller thread contact is a
+    designed line contact, checked elsewhere) nor with the bearings, locknut, shaft ring and
+    drive key; and the screw runs
     through both carriers (its section at their mid-planes reaches the root radius and stays
     inside the carrier bore)."""
     d, lay, asm = request.getfixturevalue(which)
@@ -273,8 +350,11 @@ def test_nut_assembly_at_the_stroke_ends_clears_the_screw(request, which, stroke
     screw_parts = {"screw": build_part(d, "screw", TOL).to_trimesh(),
                    **{n: asm.placed[n][0] for n in ("screw_end_lo", "screw_end_hi")}}
     screw = {n: _solid(m) for n, m in screw_parts.items()}
-    fixed = {n: _solid(*asm.placed[n][:2]) for n in PURCHASED}
-    moving = [n for n in asm.placed if Assembly.rigid_body(n) != "screw" and n not in PURCHASED]
+    # what stays with the screw (moving_group "screw"): its ends and the bearings, locknut,
+    # shaft ring and drive key; the flange bolts travel with the nut
+    fixed = {n: _solid(*asm.placed[n][:2]) for n in PURCHASED if moving_group(n) == "screw"}
+    moving = [n for n in asm.placed if moving_group(Assembly.rigid_body(n)) != "screw"]
+    assert set(fixed) == set(PURCHASED) - {f"flange_bolt_{k}" for k in range(6)}
     last = d.roller.count - 1
     assert {"nut", "nut_flange", "nut_end_lo", "nut_ring_gear_hi", "carrier_lo", "retaining_ring_hi",
             f"roller_{last}", f"roller_{last}_gear_lo", f"roller_{last}_journal_hi"} <= set(moving)

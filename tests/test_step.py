@@ -559,11 +559,9 @@ def _check_step_assembly(out: Path, report: dict) -> None:
     counts: dict[str, int] = {}
     for inst in back.instances:
         counts[inst.product] = counts.get(inst.product, 0) + 1
-    # each product is named as its parts-list line and has that line's quantity of copies;
-    # every line has a product but the bolts and the key (purchased, not modelled)
+    # each parts-list line is a product named as the line, with the line's quantity of copies
     rows = {row["part"]: row["quantity"] for row in report["parts_list"]}
-    assert counts == {p: rows[p] for p in counts}
-    assert set(counts) == set(rows) - {"flange bolt", "drive key"}
+    assert counts == rows
     glb = glb_node_transforms(out / "assembly.glb")
     for inst in back.instances:
         T = glb[inst.name]
@@ -654,6 +652,33 @@ def test_keyway_closed_form_is_the_volume_cut(ocp):
     k = keyway_volume(r_j, drive.key.width_mm, drive.key.shaft_depth_mm, z1 - z0)
     assert k == pytest.approx(removed, rel=1e-9) and k == pytest.approx(quad, rel=1e-9)
     assert 250.0 < k < 320.0          # 5 x 3 mm key, 22 mm long: about b t1 l less the round ends
+
+
+def test_bolt_and_key_envelopes_are_exact_solids_of_their_closed_forms(ocp):
+    """The STEP shapes of the default design's flange bolt (ISO 4762 M5 x 16: head 8.5 x 5
+    on a 5 x 16 shank) and drive key (DIN 6885 A 5 x 5 x 22): valid single solids whose
+    volumes (planes, cylinders and their exact integrals) equal pi (r_s^2 l + r_h^2 k) and
+    ((l - b) b + pi b^2 / 4) h, with the bounding boxes of their frames."""
+    from prs_geom.checks.brep import shape_volume
+    from prs_geom.exports.step_assembly import envelope_shapes
+
+    shapes = envelope_shapes(default_design())
+    bolt, key = shapes["flange_bolt"], shapes["drive_key"]
+    assert brep_valid(bolt) and brep_valid(key) and solids_in(bolt) == solids_in(key) == 1
+    assert shape_volume(bolt) == pytest.approx(math.pi * (2.5 ** 2 * 16.0 + 4.25 ** 2 * 5.0), rel=1e-9)
+    assert shape_volume(key) == pytest.approx((17.0 * 5.0 + math.pi * 2.5 ** 2) * 5.0, rel=1e-9)
+    assert _bbox(bolt) == pytest.approx((-4.25, -4.25, 0.0, 4.25, 4.25, 21.0), abs=1e-6)
+    assert _bbox(key) == pytest.approx((0.0, -2.5, 0.0, 5.0, 2.5, 22.0), abs=1e-6)
+
+
+def _bbox(shape) -> tuple[float, ...]:
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.AddOptimal_s(shape, box, False, False)
+    lo, hi = box.CornerMin(), box.CornerMax()
+    return (lo.X(), lo.Y(), lo.Z(), hi.X(), hi.Y(), hi.Z())
 
 
 #: The reduced run builds the flat drive with a free end here; the keyed screw of the default

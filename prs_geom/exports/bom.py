@@ -172,11 +172,13 @@ def _actuator_rows(act: Any) -> list[_Row]:
     if m.kind == "flange" and m.bolt is not None:
         rule = act.sizes["actuator.nut_mount.bolt_length_mm"].source
         rows.append(("flange bolt", m.bolt_count, None, f"ISO 4762 {m.bolt.name} x {m.bolt_length_mm:g} - 8.8",
-                     f"socket head cap screw, nut flange to housing; length: {rule}; {PURCHASED}", None))
+                     f"socket head cap screw, nut flange to housing; length: {rule}; {PURCHASED}", None,
+                     "flange_bolt_0"))
     key = act.sizes.get("actuator.drive.key")
     if key is not None:
         rows.append(("drive key", 1, None, str(key.value),
-                     f"parallel key (DIN 6885-1 form A) in the drive journal's keyway; {PURCHASED}", None))
+                     f"parallel key (DIN 6885-1 form A) in the drive journal's keyway; {PURCHASED}", None,
+                     "drive_key"))
     return rows
 
 

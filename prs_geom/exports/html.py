@@ -55,7 +55,8 @@ __all__ = ["DISPLAY_TOLERANCE_MM", "COLOURS", "scene_payload", "three_js", "Q", 
 DISPLAY_TOLERANCE_MM = 0.1
 
 COLOURS = {"screw": "#8a9bb0", "nut": "#c9a66b", "roller": "#7fb37f", "gear": "#9a9aa4", "carrier": "#b4b4c0",
-           "retaining": "#2e2e33", "bearing": "#b8bcc6", "locknut": "#3a3a40", "shaft": "#2e2e33"}
+           "retaining": "#2e2e33", "bearing": "#b8bcc6", "locknut": "#3a3a40", "shaft": "#2e2e33",
+           "flange": "#1c1c20", "drive": "#74747a"}
 
 
 def _b64(a: np.ndarray) -> str:
@@ -75,7 +76,7 @@ def scene_payload(design: PRSDesign, tol: float = DISPLAY_TOLERANCE_MM, screw_pr
         colour = COLOURS["gear"] if kind == "gear" else COLOURS[name.split("_")[0]]
         instances.append({"name": name, "mesh": index[id(mesh)], "T": [float(x) for x in T.ravel()],
                           "colour": colour, "cut": name.startswith(("nut", "carrier", "retaining", "bearing", "locknut",
-                                                                  "shaft_ring"))})
+                                                                  "shaft_ring", "flange_bolt"))})
     tri = sum(len(asm.placed[i["name"]][0].faces) for i in instances)
     out = {"meshes": meshes, "instances": instances, "tolerance_mm": tol, "triangles": int(tri)}
     motion = _motions(asm)

@@ -153,6 +153,8 @@ MATERIALS = {
     "bearing": Material("bearing steel", (0.70, 0.71, 0.74, 1.0)),
     "locknut": Material("locknut steel", (0.20, 0.20, 0.22, 1.0)),
     "shaft_ring": Material("shaft ring spring steel", (0.08, 0.08, 0.09, 1.0)),
+    "flange_bolt": Material("bolt steel, black oxide", (0.06, 0.06, 0.07, 1.0)),
+    "drive_key": Material("key steel", (0.45, 0.45, 0.47, 1.0)),
 }
 
 
@@ -199,7 +201,7 @@ def _continuous(q: NDArray[np.float64]) -> NDArray[np.float64]:
 def part_family(name: str) -> str:
     """The material key (:data:`MATERIALS`) of a scene part or a complete part: its family
     (screw, roller, gear, bearing, ...)."""
-    for family in ("retaining_ring", "shaft_ring"):
+    for family in ("retaining_ring", "shaft_ring", "flange_bolt", "drive_key"):
         if name.startswith(family):
             return family
     return "gear" if "gear" in name else name.split("_")[0]
@@ -230,9 +232,9 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
     ``screw revolution`` (:func:`mechanism_animation`):
 
     * ``screw``: turns about the axis; children: an actuator's screw ends, bearings,
-      locknut and shaft ring (:func:`moving_group`);
+      locknut, shaft ring and drive key (:func:`moving_group`);
     * ``nut_assembly`` (no mesh): travels along the axis; children: the nut, its ring gears,
-      ends and (an actuator's) flange, the retaining rings;
+      ends and (an actuator's) flange and flange bolts, the retaining rings;
     * ``carrier`` (no mesh): travels with the nut and turns at the carrier speed; children:
       the carriers and the rollers ``roller_<k>``, each spinning about its own axis, with
       its gears and journals as children.
@@ -288,14 +290,14 @@ def assembly_scene(asm: Any, title: str = "", animate: bool = False) -> Scene:
 
 def moving_group(body: str) -> str:
     """What a rigid body (:meth:`~prs_geom.mesh.assembly.Assembly.rigid_body`) moves with in
-    the running mechanism: "screw" (the screw, and an actuator's bearings, locknut and shaft
-    ring: the locknut and the ring turn with it, and a bearing's envelope is a body of
-    revolution, so turning it with the screw shows what standing still would), "nut" (the
-    nut and the retaining rings in its grooves), "carrier" (both carriers) or, for a roller,
-    the roller itself."""
-    if body.startswith(("bearing_", "locknut", "shaft_ring")):
+    the running mechanism: "screw" (the screw, and an actuator's bearings, locknut, shaft
+    ring and drive key: the locknut, the ring and the key turn with it, and a bearing's
+    envelope is a body of revolution, so turning it with the screw shows what standing still
+    would), "nut" (the nut, the retaining rings in its grooves and the flange bolts),
+    "carrier" (both carriers) or, for a roller, the roller itself."""
+    if body.startswith(("bearing_", "locknut", "shaft_ring", "drive_key")):
         return "screw"
-    if body == "nut" or body.startswith("retaining_ring"):
+    if body == "nut" or body.startswith(("retaining_ring", "flange_bolt")):
         return "nut"
     return "carrier" if body.startswith("carrier") else body
 

@@ -49,7 +49,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["AUTHORITY_NOTE", "BBOX_MESH_LIMIT_MM", "INSTALL_HINT", "MECHANISM_STEP_PARTS", "PARTS", "SEW_TOLERANCE",
            "STEP_SCHEMA", "StepFileContent", "StepSolid", "complete_part_failed", "complete_part_result", "complete_screw_solid", "mechanism_step_solid",
-           "read_document", "read_step", "require_ocp", "step_solid", "write_document", "write_solids", "write_step"]
+           "read_document", "read_step", "require_ocp", "stadium_prism", "step_solid", "write_document", "write_solids",
+           "write_step"]
 
 PARTS = ("screw", "roller", "nut")
 #: The mechanism parts with a STEP file of their own (the journals and nut ends belong to the
@@ -839,8 +840,8 @@ def _drive_cutter(end: Any):
     """The keyway (DIN 6885-1 form A: a box with two half-round ends, floor at r_j - t1) or
     the flat of a screw end's drive journal, on the +x side, as the mesh cuts it
     (:mod:`prs_geom.mesh.actuator`), overshooting the journal by ``PAD_MM``."""
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox, BRepPrimAPI_MakeCylinder
-    from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeBox
+    from OCP.gp import gp_Pnt
 
     from prs_geom.mesh.actuator import PAD_MM, drive_journal_radius
 
@@ -849,12 +850,29 @@ def _drive_cutter(end: Any):
     if end.key is None:
         x0 = r_j - end.flat_depth_mm
         return BRepPrimAPI_MakeBox(gp_Pnt(x0, -r_j - PAD_MM, z0), gp_Pnt(r_j + PAD_MM, r_j + PAD_MM, z1)).Shape()
-    a = 0.5 * end.key.width_mm
-    x0, x1 = r_j - end.key.shaft_depth_mm, r_j + PAD_MM
-    box = BRepPrimAPI_MakeBox(gp_Pnt(x0, -a, z0 + a), gp_Pnt(x1, a, z1 - a)).Shape()
-    ends = [BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(x0, 0.0, z), gp_Dir(1.0, 0.0, 0.0)), a, x1 - x0).Shape()
-            for z in (z0 + a, z1 - a)]
-    return _boolean("fuse", box, ends)
+    x0 = r_j - end.key.shaft_depth_mm
+    return stadium_prism(end.key.width_mm, (z0, z1), x0, r_j + PAD_MM - x0)
+
+
+def stadium_prism(width: float, span: tuple[float, float], x0: float, height: float) -> Any:
+    """The exact solid of a DIN 6885-1 form A key or keyway: a stadium in the plane x = x0
+    (along z over ``span``, ``width`` across y, half-round ends of radius width / 2: two
+    lines and two half circles) extruded along +x by ``height`` (mm)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeWire
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.GC import GC_MakeArcOfCircle
+    from OCP.gp import gp_Pnt, gp_Vec
+
+    a, (z0, z1) = 0.5 * width, span
+    right_lo, right_hi = gp_Pnt(x0, a, z0 + a), gp_Pnt(x0, a, z1 - a)
+    left_hi, left_lo = gp_Pnt(x0, -a, z1 - a), gp_Pnt(x0, -a, z0 + a)
+    wire = BRepBuilderAPI_MakeWire()
+    wire.Add(BRepBuilderAPI_MakeEdge(right_lo, right_hi).Edge())
+    wire.Add(BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(right_hi, gp_Pnt(x0, 0.0, z1), left_hi).Value()).Edge())
+    wire.Add(BRepBuilderAPI_MakeEdge(left_hi, left_lo).Edge())
+    wire.Add(BRepBuilderAPI_MakeEdge(GC_MakeArcOfCircle(left_lo, gp_Pnt(x0, 0.0, z0), right_lo).Value()).Edge())
+    face = BRepBuilderAPI_MakeFace(wire.Wire(), True).Face()
+    return BRepPrimAPI_MakePrism(face, gp_Vec(height, 0.0, 0.0)).Shape()
 
 
 def _fill_voids(shape: Any) -> tuple[Any, float]:

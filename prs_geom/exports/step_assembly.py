@@ -12,8 +12,8 @@ middle of the stroke).
 
 Shapes: the per-part B-rep solids of :mod:`prs_geom.exports.step` and
 :mod:`prs_geom.exports.step_gears` (the complete screw, roller and nut or their thread bodies, the
-exact carrier and retaining ring) and, for a purchased part, its envelope as an exact ring
-(OpenCascade primitives). The product's colour is the part's display colour of the GLB
+exact carrier and retaining ring) and, for a purchased part, its envelope as an exact solid
+(OpenCascade primitives: a ring, a bolt's head and shank revolved, a key's stadium extruded). The product's colour is the part's display colour of the GLB
 (:data:`prs_geom.exports.scene.MATERIALS`, converted to sRGB). XCAF writes the file (AP214,
 product structure with NEXT_ASSEMBLY_USAGE_OCCURRENCE and item-defined transformations) and
 reads it back (:func:`read_step_assembly`) before it is moved into place.
@@ -36,7 +36,8 @@ from prs_geom.model.io import atomic_path
 if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.mesh.parts import CompletePart
 
-__all__ = ["ASSEMBLY_FILE", "assembly_files", "envelope_shapes", "placement_problems", "product_labels", "rotation_angle", "StepAssemblyContent", "StepInstance", "read_step_assembly",
+__all__ = ["ASSEMBLY_FILE", "StepAssemblyContent", "StepInstance", "assembly_files", "bolt_shape", "envelope_shapes",
+           "key_shape", "placement_problems", "product_labels", "read_step_assembly", "rotation_angle",
            "write_step_assembly"]
 
 #: The assembly file's name.
@@ -93,21 +94,25 @@ def _matrix(trsf) -> NDArray[np.float64]:
 
 
 def envelope_shapes(design: Any) -> dict[str, Any]:
-    """The purchased parts of ``design``'s actuator (none without one) as exact B-rep rings,
-    keyed by complete-part name (``bearing_fixed``, ``locknut`` ...): each envelope
-    (:func:`prs_geom.mesh.actuator.purchased_envelopes`) at its catalogue radii, in its
-    part frame (axis z, z = 0 at its lower face) like its mesh."""
+    """The purchased parts of ``design``'s actuator (none without one) as exact B-reps, keyed
+    by complete-part name (``bearing_fixed``, ``locknut``, ``flange_bolt``, ``drive_key``
+    ...), each in its part frame like its mesh: the rings
+    (:func:`prs_geom.mesh.actuator.purchased_envelopes`) at their catalogue radii (axis z,
+    z = 0 at the lower face), the flange bolt (:func:`bolt_shape`) and the drive key
+    (:func:`key_shape`)."""
     from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
     from OCP.BRepPrimAPI import BRepPrimAPI_MakeCylinder
     from OCP.gp import gp_Ax2, gp_Dir, gp_Pnt
 
     from prs_geom.geometry.actuator import actuator_layout
-    from prs_geom.mesh.actuator import purchased_envelopes
+    from prs_geom.mesh.actuator import drive_key, flange_bolts, purchased_envelopes
     from prs_geom.mesh.parts import part_name
 
     lay = actuator_layout(design)
     out: dict[str, Any] = {}
-    for env in purchased_envelopes(lay) if lay is not None else ():
+    if lay is None:
+        return out
+    for env in purchased_envelopes(lay):
         name = part_name(env.name)
         if name in out:
             continue
@@ -120,7 +125,37 @@ def envelope_shapes(design: Any) -> dict[str, Any]:
         op = BRepAlgoAPI_Cut(body, bore)
         op.Build()
         out[name] = op.Shape()
+    bolts = flange_bolts(lay)
+    if bolts:
+        out["flange_bolt"] = bolt_shape(bolts[0])
+    key = drive_key(lay)
+    if key is not None:
+        out[key.name] = key_shape(key)
     return out
+
+
+def bolt_shape(env: Any) -> Any:
+    """A flange bolt's envelope (:class:`~prs_geom.mesh.actuator.BoltEnvelope`) as an exact
+    solid in its own frame: its (r, z) outline revolved about z (planes and cylinders)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakeRevol
+    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+
+    poly = BRepBuilderAPI_MakePolygon()
+    for r, z in env.profile():
+        poly.Add(gp_Pnt(r, 0.0, z))
+    poly.Close()
+    face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+    return BRepPrimAPI_MakeRevol(face, gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), 2.0 * math.pi).Shape()
+
+
+def key_shape(env: Any) -> Any:
+    """The drive key's envelope (:class:`~prs_geom.mesh.actuator.KeyEnvelope`) as an exact
+    solid in its own frame: its stadium (:func:`prs_geom.exports.step.stadium_prism`, the
+    keyway's) in the plane x = 0 over [0, l], extruded along +x by the key height."""
+    from prs_geom.exports.step import stadium_prism
+
+    return stadium_prism(env.width_mm, (0.0, env.length_mm), 0.0, env.height_mm)
 
 
 def product_labels(design: Any) -> dict[str, str]:

@@ -24,6 +24,16 @@ screw as meshes: the nominal line contact shows as a gap of at most the chordal 
   each bearing a plain ring from bore to outside diameter over its width; the locknut a
   ring from its thread diameter to its outside diameter; the DIN 471 ring a ring from the
   groove diameter to the shaft diameter + 2 x :data:`SHAFT_RING_RIM_MM` over its thickness.
+* **Flange bolts and drive key** as their envelopes (:class:`BoltEnvelope`,
+  :func:`flange_bolts`; :class:`KeyEnvelope`, :func:`drive_key`): each ISO 4762 bolt a head
+  cylinder (d_k, height k = d) on a shank cylinder (d, the bolt length l; no socket, no
+  thread), its head on the flange's upper face and its shank down through the clearance
+  hole (into the housing, which is not modelled), one per hole (``flange_bolt_<k>``); the
+  DIN 6885-1 form A key (``drive_key``) the keyway's stadium (width b, round ends of radius
+  b / 2, over ``key_z``) from the keyway floor to the key height h, on the +x side, its arc
+  vertices staggered against the keyway's (its outline inside the keyway's polygon, touching
+  it, and at most twice the chord tolerance inside the true stadium). Bolt and key are meshed once in their own frames and placed by
+  translations (frames in the classes' docstrings).
 * **Nut flange** (``nut_flange``): an annulus from the nut end's outside radius less
   :data:`FLANGE_OVERLAP_MM` (it overlaps the nut end, the same rigid body, so the two unite)
   to half the flange diameter over the flange's span, with ``bolt_count`` ISO 273
@@ -37,14 +47,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import trimesh
+from numpy.typing import NDArray
 
 from prs_geom.geometry.actuator import ActuatorLayout, ScrewEnd
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, _circle, _extruded, _trimesh, segments
 from prs_geom.model.design import PRSDesign
 
-__all__ = ["FLANGE_OVERLAP_MM", "PAD_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "RingEnvelope", "actuator_meshes",
-           "actuator_part_names", "drive_journal_radius", "purchased_envelopes", "screw_end_profile"]
+__all__ = ["FLANGE_OVERLAP_MM", "PAD_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "BoltEnvelope", "KeyEnvelope",
+           "RingEnvelope", "actuator_meshes", "actuator_part_names", "bolt_angles", "drive_journal_radius", "drive_key",
+           "flange_bolts", "purchased_envelopes", "screw_end_profile"]
 
 #: The run-out cylinder of a screw end stays this far (mm) inside the screw's root radius, or
 #: the chord tolerance when that is coarser: the thread mesh's root facets sag inside the root
@@ -95,13 +107,107 @@ def purchased_envelopes(lay: ActuatorLayout) -> tuple[RingEnvelope, ...]:
     return tuple(out)
 
 
+@dataclass(frozen=True)
+class BoltEnvelope:
+    """A flange bolt (ISO 4762 socket head cap screw) modelled as its envelope (mm).
+
+    Own frame: axis z, z = 0 at the shank's tip; the shank (radius ``shank_radius_mm``) up
+    to z = ``length_mm`` (the nominal length l, under the head), the head (radius
+    ``head_radius_mm``) from there to ``length_mm + head_height_mm``. ``tip`` is where the
+    frame's origin lies in the screw frame (mid-stroke): the bolt is placed by that
+    translation, head up.
+    """
+
+    name: str
+    designation: str
+    shank_radius_mm: float
+    length_mm: float
+    head_radius_mm: float
+    head_height_mm: float
+    tip: tuple[float, float, float]
+
+    def profile(self) -> list[tuple[float, float]]:
+        """The (r, z) outline it is revolved from, counter-clockwise in the (r, z) plane."""
+        top = self.length_mm + self.head_height_mm
+        return [(0.0, 0.0), (self.shank_radius_mm, 0.0), (self.shank_radius_mm, self.length_mm),
+                (self.head_radius_mm, self.length_mm), (self.head_radius_mm, top), (0.0, top)]
+
+    @property
+    def volume_mm3(self) -> float:
+        """pi (r_s^2 l + r_h^2 k), mm^3."""
+        return math.pi * (self.shank_radius_mm ** 2 * self.length_mm + self.head_radius_mm ** 2 * self.head_height_mm)
+
+
+@dataclass(frozen=True)
+class KeyEnvelope:
+    """The drive's parallel key (DIN 6885-1 form A) modelled as its envelope (mm).
+
+    Own frame: x = 0 at its bottom face (on the keyway floor) up to x = ``height_mm``, y
+    across (|y| <= ``width_mm`` / 2), z along its length from 0 to ``length_mm``; the ends
+    are half-discs of radius ``width_mm`` / 2. ``origin`` is where the frame's origin lies in
+    the screw frame: the key is placed by that translation (the keyway is on the +x side).
+    """
+
+    name: str
+    designation: str
+    width_mm: float
+    height_mm: float
+    length_mm: float
+    origin: tuple[float, float, float]
+
+    @property
+    def volume_mm3(self) -> float:
+        """((l - b) b + pi b^2 / 4) h, mm^3."""
+        b = self.width_mm
+        return ((self.length_mm - b) * b + 0.25 * math.pi * b * b) * self.height_mm
+
+
+#: ISO 4762 head height k (its maximum) in bolt diameters.
+HEAD_HEIGHT_PER_DIAMETER = 1.0
+
+
+def bolt_angles(count: int) -> NDArray[np.float64]:
+    """Angular positions (rad, from +x about +z) of the flange's bolt holes: the first at
+    180 / ``count`` degrees, so that none sits on the +x axis (the drive key's side)."""
+    return math.pi / count + 2.0 * math.pi * np.arange(count) / count
+
+
+def flange_bolts(lay: ActuatorLayout) -> tuple[BoltEnvelope, ...]:
+    """The flange bolts' envelopes (``flange_bolt_<k>``, in hole order), none without a flange
+    mounting: heads on the flange's upper face, shanks down through the holes."""
+    m = lay.nut_mount
+    if m.kind != "flange" or m.bolt is None:
+        return ()
+    r_bc = 0.5 * m.bolt_circle_diameter_mm
+    d = m.bolt.diameter_mm
+    tip = m.z[1] - m.bolt_length_mm
+    designation = f"ISO 4762 {m.bolt.name} x {m.bolt_length_mm:g} - 8.8"
+    return tuple(BoltEnvelope(f"flange_bolt_{k}", designation, 0.5 * d, m.bolt_length_mm, 0.5 * m.bolt.head_diameter_mm,
+                              HEAD_HEIGHT_PER_DIAMETER * d, (r_bc * math.cos(a), r_bc * math.sin(a), tip))
+                 for k, a in enumerate(bolt_angles(m.bolt_count)))
+
+
+def drive_key(lay: ActuatorLayout) -> KeyEnvelope | None:
+    """The drive key's envelope (``drive_key``) in its keyway, None for a flat or no drive."""
+    for end in lay.ends:
+        if end.key is not None and end.key_z is not None:
+            floor = drive_journal_radius(end) - end.key.shaft_depth_mm
+            length = end.key_z[1] - end.key_z[0]
+            return KeyEnvelope("drive_key", end.key.designation(length), end.key.width_mm, end.key.height_mm,
+                               length, (floor, 0.0, end.key_z[0]))
+    return None
+
+
 def actuator_part_names(lay: ActuatorLayout) -> list[str]:
     """The actuator's scene part names in placement order: ``screw_end_lo``, ``screw_end_hi``,
-    ``nut_flange`` (a flange mounting only), the bearings, ``locknut``, ``shaft_ring``."""
+    ``nut_flange`` (a flange mounting only), the bearings, ``locknut``, ``shaft_ring``, the
+    flange bolts ``flange_bolt_<k>``, ``drive_key`` (a keyed drive only)."""
     names = ["screw_end_lo", "screw_end_hi"]
     if lay.nut_mount.kind == "flange":
         names.append("nut_flange")
-    return names + [env.name for env in purchased_envelopes(lay)]
+    names += [env.name for env in purchased_envelopes(lay)] + [b.name for b in flange_bolts(lay)]
+    key = drive_key(lay)
+    return names + ([key.name] if key is not None else [])
 
 
 def actuator_meshes(design: PRSDesign, lay: ActuatorLayout,
@@ -153,7 +259,30 @@ def actuator_meshes(design: PRSDesign, lay: ActuatorLayout,
         T = translation(env.z[0])
         T[:2, :2] = [[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]]
         out[env.name] = (shared[key], T)
+    bolts = flange_bolts(lay)
+    if bolts:
+        bolt_mesh = _trimesh(_bolt(bolts[0], fine))
+        out.update({b.name: (bolt_mesh, _translated(b.tip)) for b in bolts})
+    key_env = drive_key(lay)
+    if key_env is not None:
+        solid = _stadium_prism(key_env.width_mm, (0.0, key_env.length_mm), 0.0, key_env.height_mm, fine,
+                               staggered=True)
+        out[key_env.name] = (_trimesh(solid), _translated(key_env.origin))
     return out
+
+
+def _translated(origin: tuple[float, float, float]) -> NDArray[np.float64]:
+    T = np.eye(4)
+    T[:3, 3] = origin
+    return T
+
+
+def _bolt(env: BoltEnvelope, tol: float):
+    """A bolt's envelope revolved in its own frame (vertices on its circles)."""
+    import manifold3d
+
+    return manifold3d.CrossSection([np.asarray(env.profile(), dtype=np.float64)]).revolve(
+        segments(env.head_radius_mm, tol))
 
 
 def screw_end_profile(end: ScrewEnd, r_run_out: float | None = None) -> list[tuple[float, float]]:
@@ -198,22 +327,37 @@ def _screw_end(end: ScrewEnd, r_run_out: float, tol: float):
 
 
 def _keyway_cutter(r_j: float, width: float, depth: float, span: tuple[float, float], tol: float):
-    """The DIN 6885-1 form A keyway as a solid to cut from a journal of radius ``r_j``: a
-    stadium (length the key span, width b, ends of radius b / 2; vertices on its arcs) in the
-    (z, y) plane, from the floor x = r_j - t1 out past the journal surface."""
+    """The DIN 6885-1 form A keyway as a solid to cut from a journal of radius ``r_j``: the
+    key's stadium (:func:`_stadium_prism`) from the floor x = r_j - t1 out past the journal
+    surface."""
+    return _stadium_prism(width, span, r_j - depth, depth + _PAD_MM, tol)
+
+
+def _stadium_prism(width: float, span: tuple[float, float], x0: float, height: float, tol: float,
+                   staggered: bool = False):
+    """A stadium (length ``span`` along z, width ``width`` along y, ends of radius width / 2;
+    vertices on its arcs) in the (z, y) plane, extruded along +x from ``x0`` by ``height``.
+
+    ``staggered``: the arcs' vertices half a step off those of the unstaggered stadium and on
+    its chords' midpoints (radius a cos(pi / n), n the polygon's sides, a = width / 2): the
+    polygon lies inside the unstaggered one, touching it in those midpoints, with no vertex
+    in common (the key in its keyway: no shared volume, and no shared vertex that a mesh
+    file without topology would merge into edges of four faces). Its sides and ends lie
+    a sin^2(pi / n) <= 2 ``tol`` inside the true stadium."""
     a = 0.5 * width
     half = 0.5 * (span[1] - span[0]) - a            # half the straight part
     n = segments(a, tol)
-    t = np.pi * np.arange(n // 2 + 1) / (n // 2)
+    t = np.pi * ((np.arange(n // 2) + 0.5) if staggered else np.arange(n // 2 + 1)) / (n // 2)
+    if staggered:
+        a *= math.cos(math.pi / n)
     # u along -z (see the rotation below), v along y: right arc, then left arc
     right = np.column_stack([half + a * np.sin(t), -a * np.cos(t)])
     left = np.column_stack([-half - a * np.sin(t), a * np.cos(t)])
     stadium = np.vstack([right, left])
-    height = depth + _PAD_MM
     solid = _extruded(stadium, [], 0.0, height)
-    # (u, v, w) -> (x, y, z) = (w + r_j - t1, v, z_mid - u): a rotation (determinant +1)
+    # (u, v, w) -> (x, y, z) = (w + x0, v, z_mid - u): a rotation (determinant +1)
     z_mid = 0.5 * (span[0] + span[1])
-    M = np.array([[0.0, 0.0, 1.0, r_j - depth], [0.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, z_mid]])
+    M = np.array([[0.0, 0.0, 1.0, x0], [0.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 0.0, z_mid]])
     return solid.transform(M)
 
 
@@ -228,7 +372,7 @@ def _flange(lay: ActuatorLayout, mech: MechanismLayout, tol: float):
     assert m.bolt is not None
     count = m.bolt_count
     r_bc = 0.5 * m.bolt_circle_diameter_mm
-    angles = math.pi / count + 2.0 * math.pi * np.arange(count) / count
+    angles = bolt_angles(count)
     holes = [_circle(0.5 * m.bolt.clearance_hole_mm, tol, (r_bc * math.cos(a), r_bc * math.sin(a)), hole=True)
              for a in angles]
     inner = _circle(mech.nut_end_outer_radius_mm - FLANGE_OVERLAP_MM, tol, hole=True)

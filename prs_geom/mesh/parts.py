@@ -45,7 +45,7 @@ class CompletePart:
     name : str
         The part: ``screw``, ``roller``, ``nut``, ``carrier``, ``retaining_ring``, or a
         purchased part's envelope (``bearing_fixed``, ``bearing_floating``, ``locknut``,
-        ``shaft_ring``).
+        ``shaft_ring``, ``flange_bolt``, ``drive_key``).
     vertices, faces : ndarray
         The union of its pieces in the part frame (mm), float64 and int64.
     volume_mm3 : float
@@ -103,7 +103,7 @@ class CompletePart:
 
 
 #: Purchased parts (envelopes) by the prefix of their body name.
-_PURCHASED = ("bearing_", "locknut", "shaft_ring")
+_PURCHASED = ("bearing_", "locknut", "shaft_ring", "flange_bolt", "drive_key")
 
 
 def part_name(body: str) -> str:
