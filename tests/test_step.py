@@ -484,7 +484,7 @@ def test_complete_roller_and_nut_are_one_solid_each(ocp, heavy_scale, tmp_path, 
         # the mesh fills the buried datum slot as a closed void; the B-rep never cuts it
         assert s.filled_voids_mm3 == pytest.approx(cp.filled_voids_mm3, rel=1e-9)
         assert s.volume_mm3 > s.thread_volume_mm3 * (1.2 if part == "roller" else 1.5)
-        if part == "roller" and heavy_scale == "full":    # the 70 MB file costs a minute
+        if part == "roller" and heavy_scale == "full":    # the 52 MB file costs a minute
             section = write_solids([s], tmp_path / "roller.step")
             assert section["written"] == ["roller"]
             probe_complete_roller(read_step(tmp_path / "roller.step").shapes[0], d)
