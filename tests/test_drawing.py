@@ -155,6 +155,37 @@ def test_paper_space_title_block_and_viewports(drawings):
             assert 0 < v.dxf.center.y - v.dxf.height / 2 and v.dxf.center.y + v.dxf.height / 2 < 297
 
 
+def _layout_texts(doc):
+    """Every TEXT / MTEXT string of every layout, with the measurement texts the dimensions
+    render (ezdxf's virtual entities), as (layout name, text)."""
+    out = []
+    for layout in doc.layouts:
+        for e in layout:
+            found = list(e.virtual_entities()) if e.dxftype() == "DIMENSION" else [e]
+            out += [(layout.name, v.plain_text() if v.dxftype() == "MTEXT" else v.dxf.text)
+                    for v in found if v.dxftype() in ("TEXT", "MTEXT")]
+    return out
+
+
+def test_sheets_form_one_numbered_set_with_clean_texts(drawings):
+    """The six sheets of drawings.pdf read "Sheet n/6" for n = 1 ... 6 in page order (issue 33:
+    one sheet numbered 1/3 next to 4/6); no text carries a caret (a DXF control code: "kg/m^3"
+    printed as "kg/mq") or a doubled diameter sign."""
+    _, _, out, names, _ = drawings
+    dxfs = [n for n in names if n.endswith(".dxf")]
+    assert len(dxfs) == 6
+    sheets = []
+    for name in dxfs:
+        texts = _layout_texts(ezdxf.readfile(out / name))
+        sheets += [t.split("Sheet: ")[1] for _, t in texts if t.startswith("Sheet: ")]
+        for layout, t in texts:
+            assert "^" not in t, (name, layout, t)
+            assert not re.search(r"(%%c|\u00d8|\u2300)\s*(%%c|\u00d8|\u2300)", t, re.I), (name, layout, t)
+    assert sheets == [f"{n}/6 A3" for n in range(1, 7)]
+    density = [t for _, t in _layout_texts(ezdxf.readfile(out / "drawing_carrier.dxf")) if t.startswith("Density")]
+    assert density == ["Density: 7850 kg/m\u00b3"]
+
+
 #: what ezdxf stamps on every save with the current time (the creation date and the
 #: fingerprint GUID come from the date string and the design, so they must match)
 _VOLATILE = re.compile(rb"\n\$(TDUPDATE|TDUUPDATE|TDINDWG|TDUSRTIMER|VERSIONGUID)\r?\n *\d+\r?\n[^\r\n]*")

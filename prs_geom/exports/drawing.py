@@ -245,8 +245,10 @@ def _title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
                      dxfattribs={"layer": "TITLE"}).set_placement((x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h))
 
 
-def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str = __version__):
-    """The ezdxf document of one part's drawing (see the module docstring)."""
+def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str = __version__,
+                  sheets: int = len(PARTS)):
+    """The ezdxf document of one part's drawing (see the module docstring); ``sheets``: the
+    number of sheets in the set it belongs to (its title block reads "Sheet n/sheets")."""
     from ezdxf import bbox
 
     doc = _new_doc()
@@ -406,7 +408,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     rows = [("Design", dxf_text(design.name)), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
             ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{_scale_text(s)} (detail 10:1)"), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
-            ("Sheet", f"{PARTS.index(part) + 1}/{len(PARTS)} A3")]
+            ("Sheet", f"{PARTS.index(part) + 1}/{sheets} A3")]
     _title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")
     # -- header: model-space extents (after the page setup, which resets them)
     ext = bbox.extents(msp)
@@ -533,7 +535,7 @@ def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
             progress("drawings", len(names), total)
 
     for part in PARTS:
-        doc = build_drawing(design, contact, part, date, version)
+        doc = build_drawing(design, contact, part, date, version, sheets=len(PARTS) + len(extra or {}))
         save_dxf(doc, out / drawing_name(part))
         names.append(drawing_name(part))
         docs.append(doc)

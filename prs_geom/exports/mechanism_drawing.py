@@ -104,7 +104,7 @@ VIEW = (25.0, 85.0, 405.0, 275.0)
 def _rows(design: PRSDesign, part: str, material, scale: float, date: str, version: str,
           sheet: int) -> list[tuple[str, str]]:
     return [("Design", dxf_text(design.name)), ("Part", part), ("Material", dxf_text(material.name)),
-            ("Density", f"{material.density_kg_m3:g} kg/m^3"), ("Scale", _scale_text(scale)), ("Units", "mm"),
+            ("Density", f"{material.density_kg_m3:g} kg/m\u00b3"), ("Scale", _scale_text(scale)), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{sheet}/{3 + len(MECHANISM_DRAWINGS)} A3")]
 
