@@ -578,7 +578,10 @@ def stage_manufacturing(ctx: BuildContext) -> None:
     write_xlsx(sheets, ctx.add_file("machining.xlsx"), __version__, _build_date())
     extra = {"theoretical screw pitch dia. (grind to)":
              f"{ctx.results.contact.theoretical_screw_pitch_diameter_mm:.6f} mm"}
-    write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra)
+    from prs_geom.exports.drawing import part_profiles
+
+    write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra, part_profiles(ctx.design, ctx.results.contact),
+              _build_date())
     ctx.results.files += ctx.take("manufacturing")  # the drawings, started after the contact stage
 
 

@@ -143,3 +143,57 @@ def glb_node_transforms(path: Path) -> dict[str, np.ndarray]:
         for c in nodes[r].get("children", []):     # below the root's z-up to y-up turn
             walk(c, np.eye(4))
     return out
+
+
+def dxf_text_boxes(doc, layout) -> list[tuple[str, np.ndarray, float]]:
+    """The text boxes of a DXF layout read by ezdxf, each (label, corners (4, 2) in the
+    layout's coordinates, text height): TEXT and MTEXT entities, and the measurement texts a
+    DIMENSION renders (its virtual entities). ezdxf sizes them with the style's font (the
+    drawings pin DejaVu Sans): a TEXT from the outline of its glyph box
+    (``ezdxf.disassemble``), an MTEXT from ``ezdxf.tools.text_size.mtext_size`` at its
+    attachment point and direction."""
+    import math
+
+    from ezdxf import disassemble
+    from ezdxf.tools import text_size
+
+    def box(e):
+        if e.dxftype() == "TEXT":
+            corners = np.array([(v.x, v.y) for v in disassemble.make_primitive(e).vertices()][:4])
+            return (corners, e.dxf.height) if len(corners) == 4 else None
+        size = text_size.mtext_size(e)
+        w, h = size.total_width, size.total_height
+        attach = int(e.dxf.get("attachment_point", 1)) - 1
+        x0 = -0.5 * (attach % 3) * w
+        top = (0.0, 0.5 * h, h)[attach // 3]
+        local = np.array([[x0, top - h], [x0 + w, top - h], [x0 + w, top], [x0, top]])
+        d = e.dxf.get("text_direction", None)
+        a = math.atan2(d[1], d[0]) if d is not None else math.radians(e.dxf.get("rotation", 0.0))
+        R = np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]])
+        return local @ R + np.array([e.dxf.insert.x, e.dxf.insert.y]), e.dxf.char_height
+
+    out = []
+    for e in layout:
+        kind = e.dxftype()
+        found = list(e.virtual_entities()) if kind == "DIMENSION" else [e] if kind in ("TEXT", "MTEXT") else []
+        for v in found:
+            if v.dxftype() not in ("TEXT", "MTEXT"):
+                continue
+            text = v.plain_text() if v.dxftype() == "MTEXT" else v.dxf.text
+            got = box(v)
+            if got is not None and text.strip():
+                out.append((f"{kind} {text!r}", *got))
+    return out
+
+
+def boxes_overlap(a: np.ndarray, b: np.ndarray, margin: float) -> bool:
+    """True when the convex quadrilaterals ``a`` and ``b`` (4, 2), each grown by ``margin`` on
+    every side, overlap: no edge normal of either separates them (separating axis test)."""
+    for quad in (a, b):
+        edges = np.roll(quad, -1, axis=0) - quad
+        for n in np.column_stack([-edges[:, 1], edges[:, 0]]):
+            n = n / np.linalg.norm(n)
+            pa, pb = a @ n, b @ n
+            if pa.max() + margin <= pb.min() - margin or pb.max() + margin <= pa.min() - margin:
+                return False
+    return True

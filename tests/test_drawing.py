@@ -4,6 +4,7 @@ import re
 import shutil
 import subprocess
 from datetime import datetime
+from pathlib import Path
 
 import ezdxf
 import numpy as np
@@ -363,3 +364,39 @@ def test_assembly_balloons_match_the_parts_list(drawings):
     for it in items:
         assert f"{it.item}  {it.part}  x{it.quantity}" in notes
     assert items[4].designation in notes
+
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize("example", ["default", "graded-pitch", "four-start-seven-rollers"])
+def test_no_two_text_boxes_overlap_on_any_sheet(example):
+    """Issue 33: on every sheet (model and paper space) of the default, graded and 4-start,
+    7-roller designs, no two text boxes (TEXT, MTEXT and the dimensions' measurement texts,
+    sized by ezdxf on the pinned DejaVu Sans) come closer than a tenth of the smaller text's
+    height (0.35 mm on paper for 3.5 mm text; each box grown by 5 % of its height)."""
+    import itertools
+
+    from readers import boxes_overlap, dxf_text_boxes
+
+    from prs_geom.exports.bom import part_items
+    from prs_geom.exports.drawing import build_drawing
+    from prs_geom.exports.sheet import DRAWING_FONT
+    from prs_geom.exports.mechanism_drawing import mechanism_drawings
+    from prs_geom.geometry.mechanism import layout
+    from prs_geom.model.design import default_design
+    from prs_geom.model.io import load_design
+
+    d = default_design() if example == "default" else load_design(EXAMPLES / f"{example}.toml")
+    contact = analyse_contact(d)
+    docs = {part: build_drawing(d, contact, part, DATE, VERSION, sheets=6) for part in PARTS}
+    docs.update(mechanism_drawings(d, layout(d), part_items(d), DATE, VERSION))
+    clashes = []
+    for name, doc in docs.items():
+        assert {s.dxf.font for s in doc.styles} == {DRAWING_FONT}, name
+        for lay in doc.layouts:
+            boxes = dxf_text_boxes(doc, lay)
+            assert boxes or lay.name == "Model", (name, lay.name)
+            clashes += [(name, lay.name, a, b) for (a, qa, ha), (b, qb, hb) in itertools.combinations(boxes, 2)
+                        if boxes_overlap(qa, qb, 0.05 * min(ha, hb))]
+    assert not clashes

@@ -107,3 +107,41 @@ def test_profiles_dxf_extents_are_set(tmp_path):
     assert tuple(doc.header["$EXTMIN"])[:2] == pytest.approx(tuple(ext.extmin)[:2], abs=1e-9)
     assert tuple(doc.header["$EXTMAX"])[:2] == pytest.approx(tuple(ext.extmax)[:2], abs=1e-9)
     assert ext.extmax[0] - ext.extmin[0] > 50.0
+
+
+def test_profiles_dxf_is_a_sheet_with_the_theoretical_screw(tmp_path):
+    """Issue 33: profiles.dxf draws the screw at the theoretical pitch diameter the contact
+    analysis solves (its half-section dimension reads it to 1e-6 mm, as the title text does),
+    dimensions every view (pitch diameter, thread length = the part's), and has an A3 paper
+    space with a viewport at a standard scale and a title block (design, scale, date)."""
+    import ezdxf
+
+    from prs_geom.analysis.contact import analyse_contact
+    from prs_geom.exports.drawing import part_profiles
+    from prs_geom.geometry.frames import screw_z_range, thread_length
+    from prs_geom.model.design import default_design
+
+    d = default_design()
+    contact = analyse_contact(d)
+    path = tmp_path / "profiles.dxf"
+    write_dxf(d, path, None, part_profiles(d, contact), "2026-11-28")
+    doc = ezdxf.readfile(path)
+    assert not doc.audit().errors
+    dims = [e for e in doc.modelspace() if e.dxftype() == "DIMENSION"]
+    pitch = sorted(e.dxf.text for e in dims if "pitch" in e.dxf.text)
+    theoretical = contact.theoretical_screw_pitch_diameter_mm
+    assert abs(theoretical - d.screw.pitch_diameter_mm) > 0.1          # the two differ visibly
+    assert pitch == sorted([f"%%c{theoretical:.6f} pitch", f"%%c{d.roller.pitch_diameter_mm:.6f} pitch",
+                            f"%%c{d.nut.pitch_diameter_mm:.6f} pitch"])
+    for e in dims:                                 # each half-section dimension measures the radius
+        if "pitch" in e.dxf.text:
+            assert 2.0 * e.get_measurement() == pytest.approx(float(e.dxf.text[3:].split()[0]), abs=1e-6)
+    lengths = sorted(round(e.get_measurement(), 9) for e in dims if "thread length" in e.dxf.text)
+    lo, hi = screw_z_range(d)
+    assert lengths == sorted([round(hi - lo, 9), round(thread_length(d), 9), round(thread_length(d), 9)])
+    psp = doc.paperspace("A3_PROFILES")
+    texts = " | ".join(e.dxf.text for e in psp if e.dxftype() == "TEXT")
+    for needle in (f"Design: {d.name}", "Scale: 1:1", "Date: 2026-11-28"):
+        assert needle in texts
+    views = [e for e in psp if e.dxftype() == "VIEWPORT" and e.dxf.status != 1]
+    assert len(views) == 1 and views[0].dxf.height / views[0].dxf.view_height == pytest.approx(1.0)

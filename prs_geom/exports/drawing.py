@@ -56,6 +56,8 @@ from pathlib import Path
 import numpy as np
 
 from prs_geom._version import __version__
+from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_H, dim_override, scale_text, title_block,
+                                    use_drawing_font)
 from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.datum import DatumMark, datum_mark
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
@@ -66,19 +68,14 @@ from prs_geom.model.design import PRSDesign
 from prs_geom.runtime.progress import ProgressFn
 from prs_geom.model.io import design_hash
 
-__all__ = ["PARTS", "LAYERS", "SHEET", "FRAME", "TEXT_H", "TITLE_H", "SCALES", "DETAIL_SCALE", "MAIN_VP",
-           "NOTES", "DETAIL_VP", "TITLE_BLOCK", "ELLIPSE_CHORDS", "DRAWING_PDF", "drawing_name",
-           "part_profiles", "z_range", "section_outlines", "part_datum_mark", "flank_x", "build_drawing",
-           "render_pdf", "write_drawings"]
+__all__ = ["PARTS", "LAYERS", "SCALES", "DETAIL_SCALE", "MAIN_VP", "NOTES", "DETAIL_VP", "ELLIPSE_CHORDS",
+           "DRAWING_PDF", "drawing_name", "part_profiles", "z_range", "section_outlines", "part_datum_mark",
+           "flank_x", "build_drawing", "render_pdf", "write_drawings"]
 
 PARTS = ("screw", "roller", "nut")
 LAYERS = {"OUTLINE": (7, "Continuous", 50), "CENTER": (1, "CENTER", 25), "DIMENSIONS": (3, "Continuous", 25),
           "TEXT": (2, "Continuous", 25), "DETAIL": (7, "Continuous", 50), "TITLE": (7, "Continuous", 35),
           "HATCH": (8, "Continuous", 18)}
-SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
-FRAME = (20.0, 10.0, 410.0, 287.0)       # border: 20 mm filing margin left, 10 mm elsewhere
-TEXT_H = 3.5                             # ISO 3098 general text height on paper (mm)
-TITLE_H = 5.0                            # ISO 3098 title text height on paper (mm)
 SCALES = (2.0, 1.0, 0.5)                 # section scales tried, largest first
 DETAIL_SCALE = 10.0
 #: paper rectangles (x0, y0, x1, y1) of the section and detail viewports and the title block
@@ -86,7 +83,6 @@ MAIN_VP = (25.0, 140.0, 405.0, 275.0)
 #: Notes block on the sheet: left x, top y, wrap width in characters (3.5 mm text).
 NOTES = (230.0, 133.0, 82)
 DETAIL_VP = (25.0, 15.0, 225.0, 92.0)
-TITLE_BLOCK = (230.0, 10.0, 410.0, 75.0)
 ELLIPSE_CHORDS = 24
 DRAWING_PDF = "drawings.pdf"
 
@@ -165,13 +161,6 @@ def flank_x(design: PRSDesign, part: str, profile: ThreadProfile, tooth: int, r:
 
 
 # --------------------------------------------------------------------------- DXF
-def _dim_override(scale: float, decimals: int = 4) -> dict:
-    """Dimension style override for text of TEXT_H on paper at a view scale ``scale``."""
-    return {"dimscale": 1.0 / scale, "dimtxt": TEXT_H, "dimasz": 2.5, "dimexo": 1.0, "dimexe": 1.5,
-            "dimgap": 0.8, "dimdec": decimals, "dimadec": decimals, "dimzin": 0, "dimazin": 0, "dimlfac": 1.0,
-            "dimtad": 1, "dimdsep": 46, "dimclrd": 3, "dimclre": 3, "dimclrt": 3}
-
-
 def _new_doc():
     import ezdxf
     from ezdxf import units
@@ -182,6 +171,7 @@ def _new_doc():
     doc.header["$MEASUREMENT"] = 1
     for name, (color, lt, lw) in LAYERS.items():
         doc.layers.add(name, color=color, linetype=lt, lineweight=lw)
+    use_drawing_font(doc)
     return doc
 
 
@@ -199,10 +189,6 @@ def _choose_scale(length: float, height: float) -> float:
         if length * s + 110.0 <= w and height * s + 50.0 <= h:
             return s
     return SCALES[-1]
-
-
-def _scale_text(s: float) -> str:
-    return f"{s:g}:1" if s >= 1 else f"1:{1 / s:g}"
 
 
 def _normal_tooth(profile: ThreadProfile) -> tuple[list[tuple[float, float, float]], float]:
@@ -228,23 +214,6 @@ def _normal_tooth(profile: ThreadProfile) -> tuple[list[tuple[float, float, floa
     return pts, rb
 
 
-def _title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
-    x0, y0, x1, y1 = TITLE_BLOCK
-    psp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs={"layer": "TITLE"})
-    row_h = (y1 - y0 - 10.0) / ((len(rows) + 1) // 2)
-    psp.add_line((x0, y1 - 10.0), (x1, y1 - 10.0), dxfattribs={"layer": "TITLE"})
-    psp.add_text(title, height=TITLE_H, dxfattribs={"layer": "TITLE"}).set_placement((x0 + 2.0, y1 - 7.5))
-    xm = 0.5 * (x0 + x1)
-    psp.add_line((xm, y0), (xm, y1 - 10.0), dxfattribs={"layer": "TITLE"})
-    for i, (key, val) in enumerate(rows):
-        col, row = i % 2, i // 2
-        yy = y1 - 10.0 - (row + 1) * row_h
-        if row:
-            psp.add_line((x0, yy + row_h), (x1, yy + row_h), dxfattribs={"layer": "TITLE"})
-        psp.add_text(f"{key}: {val}", height=TEXT_H if len(key) + len(val) < 26 else 2.5,
-                     dxfattribs={"layer": "TITLE"}).set_placement((x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h))
-
-
 def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str = __version__,
                   sheets: int = len(PARTS)):
     """The ezdxf document of one part's drawing (see the module docstring); ``sheets``: the
@@ -259,7 +228,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     outer = 0.5 * design.nut.outer_diameter_mm if part == "nut" else profile.outer_radius
     s = _choose_scale(hi - lo, 2.0 * outer)
     k = 1.0 / s                                   # paper mm -> model mm
-    ov = _dim_override(s)
+    ov = dim_override(s)
     # -- section outlines and centre line
     for pts in section_outlines(design, part, profile):
         msp.add_lwpolyline(pts, close=True, dxfattribs={"layer": "OUTLINE"})
@@ -286,8 +255,10 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
         xb = hi + (12.0 + 12.0 * i) * k
         msp.add_linear_dim(base=(xb, 0.0), p1=(hi, r), p2=(hi, -r), angle=90.0, text=label,
                            override=ov, dxfattribs={"layer": "DIMENSIONS"}).render()
-    # -- detail marker on tooth 2 of the main view, datum A, angular datum note
-    xm = flank_x(design, part, profile, 2, rp) - float(profile.tooth_half_width(rp))
+    # -- detail marker on the middle tooth of the main view (clear of the datum flags and the
+    # slot's depth dimension at face A), datum A, angular datum note
+    detail_tooth = max(2, design.thread.engaged_teeth // 2)
+    xm = flank_x(design, part, profile, detail_tooth, rp) - float(profile.tooth_half_width(rp))
     ym = 0.5 * (rc + rr)
     msp.add_circle((xm, ym), radius=0.8 * p, dxfattribs={"layer": "TEXT"})
     msp.add_text("A", height=TEXT_H * k, dxfattribs={"layer": "TEXT"}).set_placement(
@@ -327,7 +298,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
                        dxfattribs={"layer": "DETAIL"})
     _hatch(msp, [(dx + x, y, bl) for x, y, bl in tooth], DETAIL_SCALE)
     kd = 1.0 / DETAIL_SCALE
-    ovd = _dim_override(DETAIL_SCALE)
+    ovd = dim_override(DETAIL_SCALE)
     q = 0.25 * profile.pitch * profile.cos_lead
     slope = float(profile.flank.slope(rp))          # d(half-width)/dr at the pitch point (normal section)
     # directions (increasing radius) of the upper and lower flank tangents at the pitch points
@@ -373,9 +344,9 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
                      dxfattribs={"layer": "VIEWPORTS"})
     psp.add_lwpolyline([(dx0, dy0), (dx1, dy0), (dx1, dy1), (dx0, dy1)], close=True, dxfattribs={"layer": "DETAIL"})
     t = psp.add_text
-    t(f"SECTION (axial; above the axis theta = 0, below theta = 180 deg)  {_scale_text(s)}", height=TITLE_H,
+    t(f"SECTION (axial; above the axis theta = 0, below theta = 180 deg)  {scale_text(s)}", height=TITLE_H,
       dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
-    t(f"DETAIL A  {_scale_text(DETAIL_SCALE)}  (normal section of one tooth)", height=TITLE_H,
+    t(f"DETAIL A  {scale_text(DETAIL_SCALE)}  (normal section of one tooth)", height=TITLE_H,
       dxfattribs={"layer": "TEXT"}).set_placement((dx0, dy1 + 3.0))
     notes = ["Datum A: loaded-side end face (tooth 1 end, z = 0)" if part != "screw" else
              f"Datum A: loaded-side end face; nut tooth 1 end (z = 0) is {-lo:g} mm from it",
@@ -406,10 +377,10 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
         t(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((NOTES[0], NOTES[1] - 5.0 * i))
     mat = getattr(design.materials, part)
     rows = [("Design", dxf_text(design.name)), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
-            ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{_scale_text(s)} (detail 10:1)"), ("Units", "mm"),
+            ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{scale_text(s)} (detail 10:1)"), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{PARTS.index(part) + 1}/{sheets} A3")]
-    _title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")
+    title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")
     # -- header: model-space extents (after the page setup, which resets them)
     ext = bbox.extents(msp)
     # ezdxf writes the header variables from the layouts on saving
@@ -524,7 +495,7 @@ def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
     :class:`~prs_geom.analysis.contact.ContactResult` (theoretical screw);
     ``progress(stage, done, total)`` after each drawing and the PDF. Returns the file names
     written."""
-    from prs_geom.exports.dxf import save_dxf
+    from prs_geom.exports.sheet import save_dxf
 
     out = Path(out_dir)
     names, docs = [], []

@@ -24,6 +24,7 @@ import ezdxf
 from ezdxf import units
 
 from prs_geom._version import __version__
+from prs_geom.exports.sheet import save_dxf
 from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
 from prs_geom.model.design import PRSDesign
@@ -31,28 +32,11 @@ from prs_geom.geometry.profiles import ThreadProfiles
 from prs_geom.geometry.primitives import CircleArc, EllipseArc, Segment
 from prs_geom.geometry.sections import axial_section, normal_section
 
-__all__ = ["LAYERS", "TEXT_HEIGHT", "save_dxf", "write_dxf"]
+__all__ = ["LAYERS", "TEXT_HEIGHT", "VIEWPORT", "write_dxf"]
 
 LAYERS = {"PROFILE": (7, "Continuous"), "CENTRE": (1, "CENTER"), "PITCH": (3, "DASHED"),
-          "ANNOTATION": (2, "Continuous")}
+          "ANNOTATION": (2, "Continuous"), "TITLE": (7, "Continuous")}
 TEXT_HEIGHT = 1.2
-
-
-def save_dxf(doc, path: Path) -> None:
-    """Save ``doc`` with its CLASSES section in a fixed order.
-
-    ezdxf registers the classes of the entity types in use by iterating a set, so their
-    order (and the file's bytes) would change with Python's string-hash seed from run to
-    run; registering them here first, required ones in ezdxf's order and the rest sorted,
-    makes the same drawing give the same file.
-    """
-    from ezdxf.sections.classes import REQ_R2004, REQUIRED_CLASSES
-
-    for name in REQUIRED_CLASSES.get(doc.dxfversion, REQ_R2004):
-        doc.classes.add_class(name)
-    for name in sorted(doc.entitydb.dxf_types_in_use()):
-        doc.classes.add_class(name)
-    doc.saveas(path)
 
 
 def _add(block, prims) -> None:
@@ -68,17 +52,25 @@ def _add(block, prims) -> None:
                           end_angle=pr.end_deg, dxfattribs={"layer": "PROFILE"})
 
 
-def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None) -> None:
+def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None,
+              profiles: Any = None, date: str = "") -> None:
     """Write the drawing; ``extra`` adds key numbers to the title block (e.g. the
-    theoretical screw pitch diameter)."""
+    theoretical screw pitch diameter). ``profiles``: the parts' thread profiles by part
+    (:func:`prs_geom.exports.drawing.part_profiles`: the screw at its theoretical pitch
+    diameter, as the build draws it); the design's nominal ones when None. ``date``: the
+    title block's date (the build's)."""
     doc = ezdxf.new("R2010", setup=True)
     doc.units = units.MM
     doc.header["$INSUNITS"] = 4
     doc.header["$MEASUREMENT"] = 1
     for name, (color, lt) in LAYERS.items():
         doc.layers.add(name, color=color, linetype=lt)
+    from prs_geom.exports.sheet import use_drawing_font
+
+    use_drawing_font(doc)
     msp = doc.modelspace()
-    prof = ThreadProfiles.from_design(design)
+    nominal = ThreadProfiles.from_design(design)
+    prof = profiles if profiles is not None else {part: getattr(nominal, part) for part in ("screw", "roller", "nut")}
     warps = part_warps(design)
     p = design.thread.pitch_mm
     L = thread_length(design)
@@ -87,7 +79,7 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
     x_detail = max(zr["screw"][1], L) + 15.0
     placements = {}
     for part in ("screw", "roller", "nut"):
-        pr = getattr(prof, part)
+        pr = prof[part]
         body = 0.5 * design.nut.outer_diameter_mm if part == "nut" else None
         lo, hi = zr[part]
         blk = doc.blocks.new(f"{part.upper()}_AXIAL")
@@ -98,6 +90,7 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
                      height=TEXT_HEIGHT, dxfattribs={"layer": "ANNOTATION"}).set_placement(
             (lo, (body or pr.outer_radius) + 2.0))
         msp.add_blockref(blk.name, (0.0, y))
+        _dimension_view(msp, pr, lo, hi, y, body)
         nb = doc.blocks.new(f"{part.upper()}_NORMAL")
         _add(nb, normal_section(pr))
         nb.add_line((0, pr.inner_radius - 1.0), (0, pr.outer_radius + 0.5), dxfattribs={"layer": "CENTRE"})
@@ -112,7 +105,7 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
         f"prs_geom {__version__}  design: {dxf_text(design.name)}",
         f"units mm; pitch p = {p:g}; flank half-angle {design.thread.flank_half_angle_deg:g} deg; "
         f"{design.thread.hand} hand; {design.thread.engaged_teeth} teeth; {design.roller.count} rollers",
-        f"pitch dia. screw {design.screw.pitch_diameter_mm:g} ({design.screw.starts} starts), roller "
+        f"pitch dia. screw {2.0 * prof['screw'].pitch_radius:.6f} ({design.screw.starts} starts), roller "
         f"{design.roller.pitch_diameter_mm:g}, nut {design.nut.pitch_diameter_mm:g} ({design.nut.starts} starts); "
         f"roller arc r_T {design.roller.arc_radius_mm:.6g}",
         "roller and nut drawn with their pitch lists (tooth 1 at the loaded end, X = 0)",
@@ -129,6 +122,53 @@ def write_dxf(design: PRSDesign, path: Path, extra: dict[str, Any] | None = None
     # $EXTMIN/$EXTMAX: the real model-space extents (CAD "zoom extents" and viewers use them)
     from ezdxf import bbox
     ext = bbox.extents(msp)
+    _sheet(doc, design, ext, date)
     msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
     doc.header["$EXTMIN"], doc.header["$EXTMAX"] = msp.dxf.extmin, msp.dxf.extmax
     save_dxf(doc, path)
+
+
+def _dimension_view(msp, pr: Any, lo: float, hi: float, y: float, body: float | None) -> None:
+    """The axial view's dimensions (placed at its insertion height ``y``): the thread length
+    under it and, right of it, the pitch diameter as a half-section dimension (from the axis
+    to the pitch line, its text the diameter: ISO 129-1's one-sided dimension line)."""
+    from prs_geom.exports.sheet import dim_override
+
+    ov = dim_override(1.0, decimals=6)
+    ov.update(dimtxt=TEXT_HEIGHT, dimasz=1.0, dimexo=0.5, dimexe=0.8, dimgap=0.4)
+    top = body or pr.outer_radius
+    msp.add_linear_dim(base=(hi + 4.0, y), p1=(hi, y), p2=(hi, y + pr.pitch_radius), angle=90.0,
+                       text=f"%%c{2.0 * pr.pitch_radius:.6f} pitch", override=ov,
+                       dxfattribs={"layer": "ANNOTATION"}).render()
+    msp.add_linear_dim(base=(lo, y + top + 5.0), p1=(lo, y + top), p2=(hi, y + top), text="<> thread length",
+                       override=ov, dxfattribs={"layer": "ANNOTATION"}).render()
+
+
+#: Paper rectangles (x0, y0, x1, y1, mm) of the sheet's viewport; the frame and the title
+#: block are the part drawings' (:mod:`prs_geom.exports.drawing`).
+VIEWPORT = (25.0, 80.0, 405.0, 280.0)
+
+
+def _sheet(doc, design: PRSDesign, ext: Any, date: str) -> None:
+    """The A3 paper space: frame, one viewport on every view at the largest scale of
+    (2, 1, 1/2, 1/5, 1/10) that fits, the title block."""
+    from prs_geom.exports.sheet import FRAME, SHEET, scale_text, title_block
+    from prs_geom.model.io import design_hash
+
+    psp = doc.layouts.get("Layout1")
+    doc.layouts.rename("Layout1", "A3_PROFILES")
+    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
+    fx0, fy0, fx1, fy1 = FRAME
+    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
+                       dxfattribs={"layer": "ANNOTATION", "const_width": 0.7})
+    vx0, vy0, vx1, vy1 = VIEWPORT
+    w, h = ext.extmax[0] - ext.extmin[0], ext.extmax[1] - ext.extmin[1]
+    scale = next((s for s in (2.0, 1.0, 0.5, 0.2, 0.1) if w * s <= vx1 - vx0 and h * s <= vy1 - vy0), 0.05)
+    centre = (0.5 * (ext.extmin[0] + ext.extmax[0]), 0.5 * (ext.extmin[1] + ext.extmax[1]))
+    psp.add_viewport(center=(0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1)), size=(vx1 - vx0, vy1 - vy0),
+                     view_center_point=centre, view_height=(vy1 - vy0) / scale, status=2,
+                     dxfattribs={"layer": "ANNOTATION"})
+    rows = [("Design", dxf_text(design.name)), ("Content", "thread profiles"), ("Scale", scale_text(scale)),
+            ("Units", "mm"), ("Date", date), ("prs_geom", __version__), ("Design sha256", design_hash(design)),
+            ("Use", "the part drawings for making")]
+    title_block(psp, rows, f"PRS THREAD PROFILES - {dxf_text(design.name)}")

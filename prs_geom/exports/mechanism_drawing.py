@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import Any
 
 from prs_geom._version import __version__
-from prs_geom.exports.drawing import (FRAME, NOTES, SHEET, TEXT_H, TITLE_H, _dim_override, _hatch,
-                                      _new_doc, _scale_text, _stamp, _title_block)
+from prs_geom.exports.drawing import NOTES, _hatch, _new_doc, _stamp
+from prs_geom.exports.sheet import FRAME, SHEET, TEXT_H, TITLE_H, dim_override, scale_text, title_block
 from prs_geom.exports.textsafe import dxf_text, dxf_wrap
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
@@ -73,7 +73,7 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
     psp.add_viewport(center=(0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1)), size=(vx1 - vx0, vy1 - vy0),
                      view_center_point=view_centre, view_height=(vy1 - vy0) * k, status=2,
                      dxfattribs={"layer": "VIEWPORTS"})
-    psp.add_text(f"{label}  {_scale_text(scale)}", height=TITLE_H,
+    psp.add_text(f"{label}  {scale_text(scale)}", height=TITLE_H,
                  dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
     lines = [w for n in notes for w in dxf_wrap(n, NOTES[2], subsequent_indent="  ")]
     # 5 mm a line; when the lines would run past y = 13 mm (the frame is at 10 mm), closer and
@@ -82,7 +82,7 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
     height = TEXT_H if step >= 5.0 else NOTE_SMALL_H
     for i, n in enumerate(lines):
         psp.add_text(n, height=height, dxfattribs={"layer": "TEXT"}).set_placement((25.0, 70.0 - step * i))
-    _title_block(psp, rows, title)
+    title_block(psp, rows, title)
     ext = bbox.extents(msp)
     msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
     cx, cy = view_centre
@@ -104,7 +104,7 @@ VIEW = (25.0, 85.0, 405.0, 275.0)
 def _rows(design: PRSDesign, part: str, material, scale: float, date: str, version: str,
           sheet: int) -> list[tuple[str, str]]:
     return [("Design", dxf_text(design.name)), ("Part", part), ("Material", dxf_text(material.name)),
-            ("Density", f"{material.density_kg_m3:g} kg/m\u00b3"), ("Scale", _scale_text(scale)), ("Units", "mm"),
+            ("Density", f"{material.density_kg_m3:g} kg/m\u00b3"), ("Scale", scale_text(scale)), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{sheet}/{3 + len(MECHANISM_DRAWINGS)} A3")]
 
@@ -120,7 +120,7 @@ def carrier_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
     gap = 0.6 * R + 20.0
     s = _fit_scale(2 * R + gap + t + 60.0, 2 * R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
     k = 1.0 / s
-    ov = _dim_override(s)
+    ov = dim_override(s)
     lay_out = {"layer": "OUTLINE"}
     # front view centred at the origin
     msp.add_circle((0.0, 0.0), R, dxfattribs=lay_out)
@@ -194,7 +194,7 @@ def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
     g_out = -end.groove[0]
     s = _fit_scale(length + 80.0, R + 40.0, (VIEW[2] - VIEW[0], VIEW[3] - VIEW[1]))
     k = 1.0 / s
-    ov = _dim_override(s)
+    ov = dim_override(s)
     r1 = 0.5 * d1
     pts = [(0.0, R), (length, R), (length, r1), (g_out, r1), (g_out, 0.5 * d2), (g_in, 0.5 * d2), (g_in, r1)]
     if w > 0.0:     # around the ring gear the nut's material starts at the gear's root circle
@@ -292,7 +292,7 @@ def assembly_drawing(design: PRSDesign, lay: MechanismLayout, parts: list[Any], 
         targets.update(_actuator_outlines(rect, act, lay))
     msp.add_line((v0 - 6 * k, 0.0), (v1 + 6 * k, 0.0),
                  dxfattribs={"layer": "CENTER", "ltscale": 4.0 * k})
-    ov = _dim_override(s)
+    ov = dim_override(s)
     msp.add_linear_dim(base=(lo, -8 * k), p1=(lo, 0.0), p2=(hi, 0.0), text="<> nut overall", override=ov,
                        dxfattribs={"layer": "DIMENSIONS"}).render()
     # balloons above the parts, left to right in item order, each with a leader to its part

@@ -37,7 +37,7 @@ import numpy as np
 import trimesh
 from ezdxf import units
 
-from prs_geom.exports.dxf import save_dxf
+from prs_geom.exports.sheet import save_dxf
 from prs_geom.exports.scene import Material, Scene, SceneMesh, SceneNode
 from prs_geom.exports.textsafe import csv_field, dxf_text, mpl_text
 from prs_geom.geometry.planar import point_segment_distance

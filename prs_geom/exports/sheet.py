@@ -1,0 +1,102 @@
+"""The A3 sheet every drawing shares (DXF, ezdxf): the paper's constants, the one pinned
+font, the title block, the dimension style overrides, the scale label, and the
+deterministic DXF writer.
+
+The part drawings (:mod:`prs_geom.exports.drawing`), the mechanism drawings
+(:mod:`prs_geom.exports.mechanism_drawing`) and the profile overview
+(:mod:`prs_geom.exports.dxf`) are drawn on it. Paper coordinates are millimetres from the
+sheet's lower left corner (ISO A3 landscape, ISO 5457 frame with a 20 mm filing margin);
+text heights follow ISO 3098 (3.5 mm general, 5 mm titles).
+"""
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+__all__ = ["DRAWING_FONT", "FRAME", "SHEET", "TEXT_H", "TITLE_BLOCK", "TITLE_H", "dim_override", "pin_drawing_font",
+           "save_dxf", "scale_text", "title_block", "use_drawing_font"]
+
+SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
+FRAME = (20.0, 10.0, 410.0, 287.0)       # border: 20 mm filing margin left, 10 mm elsewhere
+TEXT_H = 3.5                             # ISO 3098 general text height on paper (mm)
+TITLE_H = 5.0                            # ISO 3098 title text height on paper (mm)
+#: The title block's paper rectangle (x0, y0, x1, y1), lower right of the frame.
+TITLE_BLOCK = (230.0, 10.0, 410.0, 75.0)
+#: The one font of every drawing's texts and dimensions: DejaVu Sans, which matplotlib ships,
+#: so the PDF and ezdxf's text boxes are the same on every machine (a DXF reader without it
+#: substitutes its own).
+DRAWING_FONT = "DejaVuSans.ttf"
+
+
+@functools.cache
+def pin_drawing_font() -> str:
+    """Make :data:`DRAWING_FONT` known to ezdxf's font manager (from matplotlib's font
+    folder, whatever the system has installed) and return its name. ezdxf measures and
+    renders a text style's font by file name through that manager, and falls back to another
+    installed font when the name is unknown."""
+    import matplotlib
+    from ezdxf.fonts import fonts
+
+    folder = Path(matplotlib.get_data_path()) / "fonts" / "ttf"
+    if not (folder / DRAWING_FONT).is_file():     # pragma: no cover - matplotlib always ships it
+        raise FileNotFoundError(f"matplotlib's {DRAWING_FONT} is missing from {folder}")
+    fonts.font_manager.scan_folder(folder)
+    return DRAWING_FONT
+
+
+def use_drawing_font(doc) -> None:
+    """Every text style of ``doc`` on :data:`DRAWING_FONT` and every dimension style's text
+    in the Standard style: one font for all the drawing's texts."""
+    font = pin_drawing_font()
+    for style in doc.styles:
+        style.dxf.font = font
+    for dimstyle in doc.dimstyles:
+        dimstyle.dxf.dimtxsty = "Standard"
+
+
+def dim_override(scale: float, decimals: int = 4) -> dict:
+    """Dimension style override for text of TEXT_H on paper at a view scale ``scale``."""
+    return {"dimscale": 1.0 / scale, "dimtxt": TEXT_H, "dimasz": 2.5, "dimexo": 1.0, "dimexe": 1.5,
+            "dimgap": 0.8, "dimdec": decimals, "dimadec": decimals, "dimzin": 0, "dimazin": 0, "dimlfac": 1.0,
+            "dimtad": 1, "dimdsep": 46, "dimclrd": 3, "dimclre": 3, "dimclrt": 3}
+
+
+def scale_text(s: float) -> str:
+    """The scale as drawings print it: "2:1", "1:1", "1:2"."""
+    return f"{s:g}:1" if s >= 1 else f"1:{1 / s:g}"
+
+
+def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
+    """The title block in paper space ``psp``: ``title`` on its top line, then ``rows``
+    (key, value) two to a line, "key: value" each."""
+    x0, y0, x1, y1 = TITLE_BLOCK
+    psp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs={"layer": "TITLE"})
+    row_h = (y1 - y0 - 10.0) / ((len(rows) + 1) // 2)
+    psp.add_line((x0, y1 - 10.0), (x1, y1 - 10.0), dxfattribs={"layer": "TITLE"})
+    psp.add_text(title, height=TITLE_H, dxfattribs={"layer": "TITLE"}).set_placement((x0 + 2.0, y1 - 7.5))
+    xm = 0.5 * (x0 + x1)
+    psp.add_line((xm, y0), (xm, y1 - 10.0), dxfattribs={"layer": "TITLE"})
+    for i, (key, val) in enumerate(rows):
+        col, row = i % 2, i // 2
+        yy = y1 - 10.0 - (row + 1) * row_h
+        if row:
+            psp.add_line((x0, yy + row_h), (x1, yy + row_h), dxfattribs={"layer": "TITLE"})
+        psp.add_text(f"{key}: {val}", height=TEXT_H if len(key) + len(val) < 26 else 2.5,
+                     dxfattribs={"layer": "TITLE"}).set_placement((x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h))
+
+
+def save_dxf(doc, path: Path) -> None:
+    """Save ``doc`` with its CLASSES section in a fixed order.
+
+    ezdxf registers the classes of the entity types in use by iterating a set, so their
+    order (and the file's bytes) would change with Python's string-hash seed from run to
+    run; registering them here first, required ones in ezdxf's order and the rest sorted,
+    makes the same drawing give the same file.
+    """
+    from ezdxf.sections.classes import REQ_R2004, REQUIRED_CLASSES
+
+    for name in REQUIRED_CLASSES.get(doc.dxfversion, REQ_R2004):
+        doc.classes.add_class(name)
+    for name in sorted(doc.entitydb.dxf_types_in_use()):
+        doc.classes.add_class(name)
+    doc.saveas(path)
