@@ -83,6 +83,8 @@ INVALID = {
     **{f"materials.{part}.name": st.one_of(st.just(""), st.just("   "), st.text(min_size=61, max_size=70),
                                            st.integers(), st.floats(allow_nan=False))
        for part in MATERIAL_PARTS},
+    **{f"materials.{part}.{key}": st.one_of(st.text(min_size=61, max_size=70), st.just("a\nb"), st.integers())
+       for part in MATERIAL_PARTS for key in ("grade", "heat_treatment")},
     "loading.axial_load_n": out_of(1.0, 1e10),
     "loading.installation": bad_choice(("tension-compression", "compression-compression")),
     "contact.clearance_mm": out_of(0.0, 0.1),

@@ -122,3 +122,23 @@ def test_an_atomic_write_that_fails_midway_leaves_the_old_file_and_no_temporary(
     write_file_atomic(tmp_path / "old.txt", content)
     assert (tmp_path / "old.txt").read_bytes() == (content.encode() if isinstance(content, str) else content)
     assert [p.name for p in tmp_path.iterdir()] == ["old.txt"]
+
+
+def test_material_grade_and_heat_treatment_read_with_the_part_defaults():
+    """materials.<part>.grade / heat_treatment (issue 33): a [materials.screw] table without
+    them keeps the threaded parts' defaults (100Cr6, hardened), not the bare Material's
+    empty ones; given, they replace them; the carrier's default grade is empty (not
+    specified); a multi-line or over-long grade is refused naming its field; a design round-trips."""
+    from prs_geom.model.design import THREAD_STEEL_GRADE, THREAD_STEEL_HEAT_TREATMENT
+
+    d = design_from_dict({"materials": {"screw": {"name": "bearing steel"}, "nut": {"grade": "42CrMo4 (1.7225)"}}})
+    assert (d.materials.screw.name, d.materials.screw.grade, d.materials.screw.heat_treatment) == (
+        "bearing steel", THREAD_STEEL_GRADE, THREAD_STEEL_HEAT_TREATMENT)
+    assert (d.materials.nut.grade, d.materials.nut.heat_treatment) == ("42CrMo4 (1.7225)", THREAD_STEEL_HEAT_TREATMENT)
+    assert (d.materials.carrier.grade, d.materials.carrier.heat_treatment) == ("", "")
+    with pytest.raises(DesignError) as err:
+        design_from_dict({"materials": {"roller": {"grade": "100Cr6\nsecond line"}}})
+    assert err.value.field == "materials.roller.grade"
+    with pytest.raises(DesignError, match="at most 60"):
+        design_from_dict({"materials": {"carrier": {"heat_treatment": "x" * 61}}})
+    assert design_from_dict(design_to_dict(d)) == d

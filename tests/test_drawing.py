@@ -141,7 +141,8 @@ def test_paper_space_title_block_and_viewports(drawings):
         # actuator's screw thread (201.5 mm) fits only at 1:1
         scale = "2:1" if part == "roller" else "1:1"
         for needle in (f"Design: {d.name}", f"Part: {part}", f"Scale: {scale}", f"prs_geom: {VERSION}",
-                       f"Date: {DATE}", "Units: mm", "Material E: 212000 MPa", "nu: 0.3",
+                       f"Date: {DATE}", "Units: mm", "Material: 100Cr6 (1.3505)",
+                       "Heat treatment: hardened and tempered, 58-62 HRC",
                        f"Design sha256: {design_hash(d)}"):
             assert needle in texts, (part, needle)
         heights = {round(e.dxf.height, 6) for e in psp if e.dxftype() == "TEXT"}
@@ -400,3 +401,31 @@ def test_no_two_text_boxes_overlap_on_any_sheet(example):
             clashes += [(name, lay.name, a, b) for (a, qa, ha), (b, qb, hb) in itertools.combinations(boxes, 2)
                         if boxes_overlap(qa, qb, 0.05 * min(ha, hb))]
     assert not clashes
+
+
+def test_every_part_sheet_states_material_general_tolerances_and_surface_texture(drawings):
+    """Issue 33: each part sheet (screw, roller, nut, carrier, nut end) carries its material
+    line (name, grade and heat treatment from the design's materials, or the design-file
+    field to set where a grade is not given), the general-tolerance note (ISO 2768-1 m, ISO
+    22081) and the surface texture note (ISO 21920-1, Ra in µm); the assembly sheet none of
+    them. Read back from the DXF texts, wrapped lines joined."""
+    from prs_geom.exports.sheet import GENERAL_TOLERANCES, SURFACE_TEXTURE, material_note
+
+    d, _, out, _, _ = drawings
+    sheets = {"screw": ("screw", "thread"), "roller": ("roller", "thread"), "nut": ("nut", "thread"),
+              "carrier": ("carrier", "carrier"), "nut_end": ("nut", "nut_end")}
+    for sheet, (part, texture) in sheets.items():
+        doc = ezdxf.readfile(out / f"drawing_{sheet}.dxf")
+        psp = [lay for lay in doc.layouts if lay.name != "Model"][0]
+        lines = [e.dxf.text for e in sorted((e for e in psp if e.dxftype() == "TEXT" and e.dxf.layer == "TEXT"),
+                                            key=lambda e: -e.dxf.insert.y)]
+        # wrapped notes continue on lines indented by two spaces
+        joined = " | ".join(lines).replace(" |   ", " ")
+        material = getattr(d.materials, part)
+        for note in (material_note(material, f"materials.{part}"), GENERAL_TOLERANCES,
+                     f"Surface texture (ISO 21920-1): {SURFACE_TEXTURE[texture]}"):
+            assert note in joined, (sheet, note)
+    assert "100Cr6 (1.3505); heat treatment: hardened and tempered, 58-62 HRC" in material_note(d.materials.roller, "x")
+    assert "grade not specified (materials.carrier.grade)" in material_note(d.materials.carrier, "materials.carrier")
+    doc = ezdxf.readfile(out / "drawing_assembly.dxf")
+    assert not any(GENERAL_TOLERANCES[:20] in t for _, t in _layout_texts(doc))

@@ -56,8 +56,8 @@ from pathlib import Path
 import numpy as np
 
 from prs_geom._version import __version__
-from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_H, dim_override, scale_text, title_block,
-                                    use_drawing_font)
+from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, dim_override, part_notes,
+                                    scale_text, title_block, use_drawing_font, wrap_to_width)
 from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.datum import DatumMark, datum_mark
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
@@ -80,8 +80,8 @@ SCALES = (2.0, 1.0, 0.5)                 # section scales tried, largest first
 DETAIL_SCALE = 10.0
 #: paper rectangles (x0, y0, x1, y1) of the section and detail viewports and the title block
 MAIN_VP = (25.0, 140.0, 405.0, 275.0)
-#: Notes block on the sheet: left x, top y, wrap width in characters (3.5 mm text).
-NOTES = (230.0, 133.0, 82)
+#: Notes block on the sheet: left x, top y (paper mm); lines wrap at the frame less 3 mm.
+NOTES = (230.0, 133.0)
 DETAIL_VP = (25.0, 15.0, 225.0, 92.0)
 ELLIPSE_CHORDS = 24
 DRAWING_PDF = "drawings.pdf"
@@ -370,14 +370,18 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
                          f"x {g.profile_shift + 0.0:+.2f}, width {g.face_width_mm:g}")
             notes.append(f"  W{k} = {g.span_measurement(k):.4f} mm over {k} teeth; "
                          f"{'between' if g.internal else 'over'} pins d {pin:.4f}: {g.over_pins(pin):.4f} mm")
-    import textwrap
-
-    lines = [w for n in notes for w in textwrap.wrap(n, NOTES[2], subsequent_indent="  ")]
+    notes += part_notes(getattr(design.materials, part), f"materials.{part}", "thread")
+    lines = [w for n in notes for w in wrap_to_width(n, FRAME[2] - NOTES[0] - 3.0, TEXT_H)]
+    # 5 mm a line down to the title block (its top at 75 mm); more lines step closer in the
+    # smaller ISO 3098 height, whose text box still fits the closer step
+    step = min(5.0, (NOTES[1] - TITLE_BLOCK[3] - 4.0) / max(len(lines) - 1, 1))
+    height = TEXT_H if step >= 5.0 else 2.5
     for i, n in enumerate(lines):
-        t(n, height=TEXT_H, dxfattribs={"layer": "TEXT"}).set_placement((NOTES[0], NOTES[1] - 5.0 * i))
+        t(n, height=height, dxfattribs={"layer": "TEXT"}).set_placement((NOTES[0], NOTES[1] - step * i))
     mat = getattr(design.materials, part)
-    rows = [("Design", dxf_text(design.name)), ("Part", part), ("Material E", f"{mat.youngs_modulus_mpa:g} MPa"),
-            ("nu", f"{mat.poisson_ratio:g}"), ("Scale", f"{scale_text(s)} (detail 10:1)"), ("Units", "mm"),
+    rows = [("Design", dxf_text(design.name)), ("Part", part),
+            ("Material", dxf_text(mat.grade or mat.name)),
+            ("Heat treatment", dxf_text(mat.heat_treatment) if mat.heat_treatment else "none specified"), ("Scale", f"{scale_text(s)} (detail 10:1)"), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{PARTS.index(part) + 1}/{sheets} A3")]
     title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")

@@ -19,8 +19,8 @@ a meshing device, :data:`~prs_geom.geometry.mechanism.NUT_END_RELIEF_MM`):
   table on the sheet.
 
 The design and material names are written as literal text
-(:func:`prs_geom.exports.textsafe.dxf_text`; notes wrap with
-:func:`~prs_geom.exports.textsafe.dxf_wrap`, which never cuts an escape).
+(:func:`prs_geom.exports.textsafe.dxf_text`; notes wrap to the width measured in the
+pinned font, :func:`~prs_geom.exports.sheet.wrap_to_width`, which never cuts an escape).
 """
 from __future__ import annotations
 
@@ -29,9 +29,10 @@ from pathlib import Path
 from typing import Any
 
 from prs_geom._version import __version__
-from prs_geom.exports.drawing import NOTES, _hatch, _new_doc, _stamp
-from prs_geom.exports.sheet import FRAME, SHEET, TEXT_H, TITLE_H, dim_override, scale_text, title_block
-from prs_geom.exports.textsafe import dxf_text, dxf_wrap
+from prs_geom.exports.drawing import _hatch, _new_doc, _stamp
+from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, dim_override, part_notes, scale_text,
+                                    title_block, wrap_to_width)
+from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
 from prs_geom.runtime.progress import ProgressFn
@@ -75,7 +76,8 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
                      dxfattribs={"layer": "VIEWPORTS"})
     psp.add_text(f"{label}  {scale_text(scale)}", height=TITLE_H,
                  dxfattribs={"layer": "TEXT"}).set_placement((vx0, vy1 + 3.0))
-    lines = [w for n in notes for w in dxf_wrap(n, NOTES[2], subsequent_indent="  ")]
+    # notes from x = 25 mm up to the title block's left edge, less a 3 mm gap
+    lines = [w for n in notes for w in wrap_to_width(n, TITLE_BLOCK[0] - 28.0, TEXT_H)]
     # 5 mm a line; when the lines would run past y = 13 mm (the frame is at 10 mm), closer and
     # in the smaller ISO 3098 height 2.5 mm, whose text box still fits the closer step
     step = min(5.0, 57.0 / max(len(lines) - 1, 1))
@@ -172,7 +174,8 @@ def carrier_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
              f"{design.mechanism.carrier_radial_clearance_mm:g} mm on the radius"
              if design.mechanism.carrier_guidance == "clear" else
              f"Guided in the nut bore: fit {lay.carrier_fit.fit}",
-             "Parts list item 4 (2 off)"]
+             "Parts list item 4 (2 off)",
+             *part_notes(design.materials.carrier, "materials.carrier", "carrier")]
     _sheet(doc, "A3_CARRIER", design, f"PRS CARRIER - {dxf_text(design.name)}",
            _rows(design, "carrier", design.materials.carrier, s, date, version, 4), notes,
            (0.5 * (-R + x0 + t) + 10 * k, 0.0), s, "FRONT VIEW and SECTION through a journal bore", date)
@@ -228,7 +231,8 @@ def nut_end_drawing(design: PRSDesign, lay: MechanismLayout, date: str, version:
              f"(max {ring.groove_width_max_mm:.3f}), n >= {ring.edge_distance_mm:g}",
              f"Ring gear in the first {w:g} mm (root diameter {2 * gear_root:.3f}): see the nut drawing"
              if w > 0 else "No ring gear",
-             "The upper end is the mirror image about the nut's mid-plane; parts list item 3"]
+             "The upper end is the mirror image about the nut's mid-plane; parts list item 3",
+             *part_notes(design.materials.nut, "materials.nut", "nut_end")]
     _sheet(doc, "A3_NUT_END", design, f"PRS NUT END - {dxf_text(design.name)}",
            _rows(design, "nut end", design.materials.nut, s, date, version, 5), notes,
            (0.5 * length + 20 * k, 0.5 * R), s, "SECTION (axial, upper half) of the nut end", date)

@@ -13,8 +13,9 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-__all__ = ["DRAWING_FONT", "FRAME", "SHEET", "TEXT_H", "TITLE_BLOCK", "TITLE_H", "dim_override", "pin_drawing_font",
-           "save_dxf", "scale_text", "title_block", "use_drawing_font"]
+__all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK", "TITLE_H",
+           "dim_override", "material_note", "part_notes", "pin_drawing_font", "save_dxf", "scale_text", "title_block",
+           "use_drawing_font", "wrap_to_width"]
 
 SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
 FRAME = (20.0, 10.0, 410.0, 287.0)       # border: 20 mm filing margin left, 10 mm elsewhere
@@ -22,6 +23,19 @@ TEXT_H = 3.5                             # ISO 3098 general text height on paper
 TITLE_H = 5.0                            # ISO 3098 title text height on paper (mm)
 #: The title block's paper rectangle (x0, y0, x1, y1), lower right of the frame.
 TITLE_BLOCK = (230.0, 10.0, 410.0, 75.0)
+#: The general tolerances every part sheet states: ISO 2768-1 class m for the linear and
+#: angular sizes without a tolerance of their own, and for geometry ISO 22081's general
+#: specification (ISO 2768-2, which the sheets would once have named, is withdrawn).
+GENERAL_TOLERANCES = ("General tolerances: ISO 2768-1 m for linear and angular sizes; general geometrical "
+                      "specification ISO 22081, 0.1 mm (ISO 2768-2 withdrawn)")
+#: Surface texture by sheet (ISO 21920-1, Ra): ground thread flanks as for rolling contact,
+#: gear flanks and fitted cylinders (journals, bores, seats) finish-turned or ground, the
+#: rest turned.
+SURFACE_TEXTURE = {
+    "thread": "Ra 0.4 µm thread flanks; Ra 0.8 µm gear flanks, journals and seats; Ra 3.2 µm elsewhere",
+    "carrier": "Ra 0.8 µm journal bores; Ra 1.6 µm faces; Ra 3.2 µm elsewhere",
+    "nut_end": "Ra 0.8 µm bore over the ring gear; Ra 1.6 µm groove; Ra 3.2 µm elsewhere",
+}
 #: The one font of every drawing's texts and dimensions: DejaVu Sans, which matplotlib ships,
 #: so the PDF and ezdxf's text boxes are the same on every machine (a DXF reader without it
 #: substitutes its own).
@@ -100,3 +114,40 @@ def save_dxf(doc, path: Path) -> None:
     for name in sorted(doc.entitydb.dxf_types_in_use()):
         doc.classes.add_class(name)
     doc.saveas(path)
+
+
+def material_note(material, field: str) -> str:
+    """The sheet's material line: name, grade and heat treatment of ``material``
+    (:class:`~prs_geom.model.design.Material`), each design text made literal for DXF;
+    ``field`` is the design-file path of the material (``materials.carrier``), named where a
+    grade or a heat treatment is not specified."""
+    from prs_geom.exports.textsafe import dxf_text
+
+    grade = dxf_text(material.grade) if material.grade else f"grade not specified ({field}.grade)"
+    treatment = dxf_text(material.heat_treatment) if material.heat_treatment else "none specified"
+    return f"Material: {dxf_text(material.name)}, {grade}; heat treatment: {treatment}"
+
+
+def part_notes(material, field: str, texture: str) -> list[str]:
+    """The notes every part sheet carries: material (:func:`material_note`), general
+    tolerances (:data:`GENERAL_TOLERANCES`) and surface texture (``texture``, a key of
+    :data:`SURFACE_TEXTURE`)."""
+    return [material_note(material, field), GENERAL_TOLERANCES,
+            f"Surface texture (ISO 21920-1): {SURFACE_TEXTURE[texture]}"]
+
+
+def wrap_to_width(text: str, width_mm: float, height_mm: float, indent: str = "  ") -> list[str]:
+    """``text`` wrapped (:func:`~prs_geom.exports.textsafe.dxf_wrap`, never inside a DXF
+    escape) into lines no wider than ``width_mm`` in :data:`DRAWING_FONT` at the text height
+    ``height_mm``, measured with ezdxf's font metrics (the raw string, so an escape such as
+    ``%%c`` counts wider than its sign: the lines only err short)."""
+    from ezdxf.fonts import fonts
+
+    from prs_geom.exports.textsafe import dxf_wrap
+
+    font = fonts.make_font(pin_drawing_font(), height_mm, 1.0)
+    for chars in range(max(len(text), 10), 9, -1):
+        lines = dxf_wrap(text, chars, subsequent_indent=indent)
+        if max(font.text_width(line) for line in lines) <= width_mm:
+            return lines
+    return dxf_wrap(text, 10, subsequent_indent=indent)

@@ -189,13 +189,17 @@ class Nut:
 class Material:
     """Linear elastic material: Young's modulus E (MPa), Poisson's ratio nu and the linear
     thermal expansion coefficient alpha (1/K; measurements refer to 20 degC, ISO 1); its
-    density (kg/m^3) and the name the parts list prints."""
+    density (kg/m^3) and the name the parts list prints; the grade (designation and
+    material number, e.g. "100Cr6 (1.3505)") and the heat treatment the part drawing
+    prints (empty: not specified, and the drawing says so)."""
 
     youngs_modulus_mpa: float = 212_000.0
     poisson_ratio: float = 0.3
     thermal_expansion_per_k: float = 11.5e-6
     density_kg_m3: float = 7850.0
     name: str = "steel"
+    grade: str = ""
+    heat_treatment: str = ""
 
     def __post_init__(self) -> None:
         # from magnesium alloys (1740) to tungsten carbide (15600) with margin
@@ -204,6 +208,10 @@ class Material:
         # the raw length: the parts list and report.json carry the name as written
         if not isinstance(self.name, str) or not self.name.strip() or len(self.name) > 60:
             raise DesignError("name", self.name, "must be a material name of 1 to 60 characters")
+        for key in ("grade", "heat_treatment"):
+            value = getattr(self, key)
+            if not isinstance(value, str) or len(value) > 60 or "\n" in value:
+                raise DesignError(key, value, "must be one line of at most 60 characters (empty: not specified)")
         # engineering solids span about 1 GPa (polymers) to 1.2 TPa (diamond); far outside,
         # the tooth compliances vanish or explode and the load system loses its conditioning
         _set(self, "youngs_modulus_mpa", bounded("youngs_modulus_mpa", self.youngs_modulus_mpa, 1e3, 1e7,
@@ -217,13 +225,24 @@ class Material:
                                                       0.0, 1e-3, "must be in [0, 0.001] 1/K (steel: 11.5e-6)"))
 
 
+#: The threaded parts' default grade and heat treatment: a through-hardening rolling-bearing
+#: steel (ISO 683-17) at rolling-contact hardness, as for ball and roller screw threads.
+THREAD_STEEL_GRADE = "100Cr6 (1.3505)"
+THREAD_STEEL_HEAT_TREATMENT = "hardened and tempered, 58-62 HRC"
+
+
+def _thread_steel() -> Material:
+    return Material(grade=THREAD_STEEL_GRADE, heat_treatment=THREAD_STEEL_HEAT_TREATMENT)
+
+
 @dataclass(frozen=True)
 class Materials:
-    """One material per part."""
+    """One material per part; the threaded parts default to :data:`THREAD_STEEL_GRADE`,
+    hardened (the carrier's and the retaining ring's grade are the designer's to set)."""
 
-    screw: Material = field(default_factory=Material)
-    roller: Material = field(default_factory=Material)
-    nut: Material = field(default_factory=Material)
+    screw: Material = field(default_factory=_thread_steel)
+    roller: Material = field(default_factory=_thread_steel)
+    nut: Material = field(default_factory=_thread_steel)
     carrier: Material = field(default_factory=Material)
     retaining_ring: Material = field(default_factory=Material)
 

@@ -81,6 +81,10 @@ FIELD_COMMENTS: dict[str, str] = {
     "density_kg_m3": "density (kg/m^3), for the masses of the parts list",
     **{f"materials.{part}.name": "material name printed in the parts list"
        for part in ("screw", "roller", "nut", "carrier", "retaining_ring")},
+    **{f"materials.{part}.grade": 'material grade on the part drawing, e.g. "100Cr6 (1.3505)"; "" = not specified'
+       for part in ("screw", "roller", "nut", "carrier", "retaining_ring")},
+    **{f"materials.{part}.heat_treatment": 'heat treatment on the part drawing, e.g. "hardened, 58-62 HRC"; "" = none given'
+       for part in ("screw", "roller", "nut", "carrier", "retaining_ring")},
     "mechanism.enabled": "carriers, roller journals, retaining rings and nut ends in the meshes, checks and parts list",
     "mechanism.journal_diameter_mm": "roller journal diameter (mm); omit for 0.6 x roller root diameter, down to 0.5 mm",
     "mechanism.journal_fit": 'ISO 286 fit of journal in carrier bore, hole/shaft (e.g. "H7/g6")',
@@ -205,7 +209,7 @@ def build_section(cls: type, data: Any, path: str = "") -> Any:
         sub = _nested_type(known[key])
         kwargs[key] = build_section(sub, value, f"{path}.{key}" if path else key) if sub else value
     try:
-        return cls(**kwargs)
+        return dataclasses.replace(cls, **kwargs) if not isinstance(cls, type) else cls(**kwargs)
     except DesignError as exc:
         raise exc.prefixed(path) if path and not exc.field.startswith(path + ".") else exc
 
@@ -216,7 +220,14 @@ def _nested_type(fld: dataclasses.Field) -> type | None:
     if "section" in fld.metadata:
         return fld.metadata["section"]
     factory = fld.default_factory
-    return factory if isinstance(factory, type) and dataclasses.is_dataclass(factory) else None
+    if isinstance(factory, type) and dataclasses.is_dataclass(factory):
+        return factory
+    if factory is dataclasses.MISSING:
+        return None
+    # a factory function making a dataclass with other defaults (the thread parts' material):
+    # the table's keys replace those of its default instance, not of the class
+    made = factory()
+    return made if dataclasses.is_dataclass(made) else None
 
 
 #: Design classes by the top-level ``kind`` of a file; a class may declare ``FILE_KIND``
