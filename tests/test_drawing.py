@@ -375,14 +375,15 @@ def test_no_two_text_boxes_overlap_on_any_sheet(example):
     """Issue 33: on every sheet (model and paper space) of the default, graded and 4-start,
     7-roller designs, no two text boxes (TEXT, MTEXT and the dimensions' measurement texts,
     sized by ezdxf on the pinned DejaVu Sans) come closer than a tenth of the smaller text's
-    height (0.35 mm on paper for 3.5 mm text; each box grown by 5 % of its height)."""
+    height (0.35 mm on paper for 3.5 mm text; each box grown by 5 % of its height); every
+    paper-space text lies inside the frame, and every title-block text inside its column."""
     import itertools
 
     from readers import boxes_overlap, dxf_text_boxes
 
     from prs_geom.exports.bom import part_items
     from prs_geom.exports.drawing import build_drawing
-    from prs_geom.exports.sheet import DRAWING_FONT
+    from prs_geom.exports.sheet import DRAWING_FONT, FRAME, TITLE_BLOCK
     from prs_geom.exports.mechanism_drawing import mechanism_drawings
     from prs_geom.geometry.mechanism import layout
     from prs_geom.model.design import default_design
@@ -400,6 +401,17 @@ def test_no_two_text_boxes_overlap_on_any_sheet(example):
             assert boxes or lay.name == "Model", (name, lay.name)
             clashes += [(name, lay.name, a, b) for (a, qa, ha), (b, qb, hb) in itertools.combinations(boxes, 2)
                         if boxes_overlap(qa, qb, 0.05 * min(ha, hb))]
+            if lay.name != "Model":
+                fx0, fy0, fx1, fy1 = FRAME
+                clashes += [(name, lay.name, a, "frame") for a, q, _ in boxes
+                            if q[:, 0].min() < fx0 or q[:, 0].max() > fx1 or q[:, 1].min() < fy0 or q[:, 1].max() > fy1]
+                x0, _, x1, y1 = TITLE_BLOCK
+                xm = 0.5 * (x0 + x1)
+                for label, q, _ in boxes:
+                    lo, hi = q[:, 0].min(), q[:, 0].max()
+                    if q[:, 1].max() < y1 - 10.0 and lo >= x0:       # a title-block cell
+                        if not (hi <= xm or lo >= xm) or hi > x1:
+                            clashes.append((name, lay.name, label, "title-block column"))
     assert not clashes
 
 

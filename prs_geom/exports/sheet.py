@@ -14,7 +14,7 @@ import functools
 from pathlib import Path
 
 __all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK", "TITLE_H",
-           "dim_override", "material_note", "part_notes", "pin_drawing_font", "save_dxf", "scale_text", "title_block",
+           "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf", "scale_text", "title_block",
            "use_drawing_font", "wrap_to_width"]
 
 SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
@@ -80,9 +80,23 @@ def scale_text(s: float) -> str:
     return f"{s:g}:1" if s >= 1 else f"1:{1 / s:g}"
 
 
+def fitted_height(text: str, width_mm: float, height_mm: float = TEXT_H, smaller_mm: float = 2.5) -> float:
+    """The text height (mm) at which ``text`` fits ``width_mm`` in :data:`DRAWING_FONT`:
+    ``height_mm``, else the smaller ISO 3098 height ``smaller_mm``, else that height scaled
+    down to fit (measured with ezdxf's font metrics)."""
+    from ezdxf.fonts import fonts
+
+    font = fonts.make_font(pin_drawing_font(), smaller_mm, 1.0)
+    wide = font.text_width(text)
+    if wide * height_mm / smaller_mm <= width_mm:
+        return height_mm
+    return smaller_mm if wide <= width_mm else smaller_mm * width_mm / wide
+
+
 def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
     """The title block in paper space ``psp``: ``title`` on its top line, then ``rows``
-    (key, value) two to a line, "key: value" each."""
+    (key, value) two to a line, "key: value" each, in the largest height of
+    :func:`fitted_height` that keeps it inside its cell."""
     x0, y0, x1, y1 = TITLE_BLOCK
     psp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs={"layer": "TITLE"})
     row_h = (y1 - y0 - 10.0) / ((len(rows) + 1) // 2)
@@ -95,7 +109,8 @@ def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
         yy = y1 - 10.0 - (row + 1) * row_h
         if row:
             psp.add_line((x0, yy + row_h), (x1, yy + row_h), dxfattribs={"layer": "TITLE"})
-        psp.add_text(f"{key}: {val}", height=TEXT_H if len(key) + len(val) < 26 else 2.5,
+        text = f"{key}: {val}"
+        psp.add_text(text, height=fitted_height(text, xm - x0 - 3.0),
                      dxfattribs={"layer": "TITLE"}).set_placement((x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h))
 
 
