@@ -381,7 +381,8 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
     mat = getattr(design.materials, part)
     rows = [("Design", dxf_text(design.name)), ("Part", part),
             ("Material", dxf_text(mat.grade or mat.name)),
-            ("Heat treatment", dxf_text(mat.heat_treatment) if mat.heat_treatment else "none specified"), ("Scale", f"{scale_text(s)} (detail 10:1)"), ("Units", "mm"),
+            ("Heat treatment", dxf_text(mat.heat_treatment) if mat.heat_treatment else "none specified"),
+            ("Scale", f"{scale_text(s)} (detail 10:1)"), ("Units", "mm"),
             ("Date", date), ("prs_geom", version), ("Design sha256", design_hash(design)),
             ("Sheet", f"{PARTS.index(part) + 1}/{sheets} A3")]
     title_block(psp, rows, f"PRS {part.upper()} - {dxf_text(design.name)}")

@@ -13,9 +13,9 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-__all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK", "TITLE_H",
-           "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf", "scale_text", "title_block",
-           "use_drawing_font", "wrap_to_width"]
+__all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK",
+           "TITLE_H", "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
+           "scale_text", "title_block", "use_drawing_font", "wrap_to_width"]
 
 SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
 FRAME = (20.0, 10.0, 410.0, 287.0)       # border: 20 mm filing margin left, 10 mm elsewhere

@@ -13,7 +13,8 @@ middle of the stroke).
 Shapes: the per-part B-rep solids of :mod:`prs_geom.exports.step` and
 :mod:`prs_geom.exports.step_gears` (the complete screw, roller and nut or their thread bodies, the
 exact carrier and retaining ring) and, for a purchased part, its envelope as an exact solid
-(OpenCascade primitives: a ring, a bolt's head and shank revolved, a key's stadium extruded). The product's colour is the part's display colour of the GLB
+(OpenCascade primitives: a ring, a bolt's head and shank revolved, a key's stadium
+extruded). The product's colour is the part's display colour of the GLB
 (:data:`prs_geom.exports.scene.MATERIALS`, converted to sRGB). XCAF writes the file (AP214,
 product structure with NEXT_ASSEMBLY_USAGE_OCCURRENCE and item-defined transformations) and
 reads it back (:func:`read_step_assembly`) before it is moved into place.

@@ -32,8 +32,9 @@ screw as meshes: the nominal line contact shows as a gap of at most the chordal 
   DIN 6885-1 form A key (``drive_key``) the keyway's stadium (width b, round ends of radius
   b / 2, over ``key_z``) from the keyway floor to the key height h, on the +x side, its arc
   vertices staggered against the keyway's (its outline inside the keyway's polygon, touching
-  it, and at most twice the chord tolerance inside the true stadium). Bolt and key are meshed once in their own frames and placed by
-  translations (frames in the classes' docstrings).
+  it, and at most twice the chord tolerance inside the true stadium). Bolt and key are
+  meshed once in their own frames and placed by translations (frames in the classes'
+  docstrings).
 * **Nut flange** (``nut_flange``): an annulus from the nut end's outside radius less
   :data:`FLANGE_OVERLAP_MM` (it overlaps the nut end, the same rigid body, so the two unite)
   to half the flange diameter over the flange's span, with ``bolt_count`` ISO 273
@@ -54,7 +55,8 @@ from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, _circle, _extruded, _trimesh, segments
 from prs_geom.model.design import PRSDesign
 
-__all__ = ["FLANGE_OVERLAP_MM", "PAD_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM", "BoltEnvelope", "KeyEnvelope",
+__all__ = ["FLANGE_OVERLAP_MM", "HEAD_HEIGHT_PER_DIAMETER", "PAD_MM", "RUN_OUT_INSET_MM", "SHAFT_RING_RIM_MM",
+           "BoltEnvelope", "KeyEnvelope",
            "RingEnvelope", "actuator_meshes", "actuator_part_names", "bolt_angles", "drive_journal_radius", "drive_key",
            "flange_bolts", "purchased_envelopes", "screw_end_profile"]
 
