@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-__all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK",
+__all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "MIN_TEXT_H", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK",
            "TITLE_H", "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
            "scale_text", "title_block", "use_drawing_font", "wrap_to_width"]
 
@@ -80,23 +80,24 @@ def scale_text(s: float) -> str:
     return f"{s:g}:1" if s >= 1 else f"1:{1 / s:g}"
 
 
-def fitted_height(text: str, width_mm: float, height_mm: float = TEXT_H, smaller_mm: float = 2.5) -> float:
-    """The text height (mm) at which ``text`` fits ``width_mm`` in :data:`DRAWING_FONT`:
-    ``height_mm``, else the smaller ISO 3098 height ``smaller_mm``, else that height scaled
-    down to fit (measured with ezdxf's font metrics)."""
+#: The smallest text height on paper (mm): ISO 3098's smallest nominal height.
+MIN_TEXT_H = 2.5
+
+
+def fitted_height(text: str, width_mm: float, height_mm: float = TEXT_H) -> float:
+    """The text height (mm) for ``text`` in ``width_mm`` (:data:`DRAWING_FONT`, ezdxf's font
+    metrics): ``height_mm`` when it fits there, else :data:`MIN_TEXT_H` (never smaller: a
+    text that does not fit at that height is wrapped, :func:`wrap_to_width`)."""
     from ezdxf.fonts import fonts
 
-    font = fonts.make_font(pin_drawing_font(), smaller_mm, 1.0)
-    wide = font.text_width(text)
-    if wide * height_mm / smaller_mm <= width_mm:
-        return height_mm
-    return smaller_mm if wide <= width_mm else smaller_mm * width_mm / wide
+    wide = fonts.make_font(pin_drawing_font(), height_mm, 1.0).text_width(text)
+    return height_mm if wide <= width_mm else MIN_TEXT_H
 
 
 def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
     """The title block in paper space ``psp``: ``title`` on its top line, then ``rows``
-    (key, value) two to a line, "key: value" each, in the largest height of
-    :func:`fitted_height` that keeps it inside its cell."""
+    (key, value) two to a line, "key: value" each, 3.5 mm high where it fits its cell, else
+    2.5 mm and wrapped within the cell (:func:`fitted_height`, :func:`wrap_to_width`)."""
     x0, y0, x1, y1 = TITLE_BLOCK
     psp.add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True, dxfattribs={"layer": "TITLE"})
     row_h = (y1 - y0 - 10.0) / ((len(rows) + 1) // 2)
@@ -109,9 +110,12 @@ def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
         yy = y1 - 10.0 - (row + 1) * row_h
         if row:
             psp.add_line((x0, yy + row_h), (x1, yy + row_h), dxfattribs={"layer": "TITLE"})
-        text = f"{key}: {val}"
-        psp.add_text(text, height=fitted_height(text, xm - x0 - 3.0),
-                     dxfattribs={"layer": "TITLE"}).set_placement((x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h))
+        text, cell = f"{key}: {val}", xm - x0 - 3.0
+        height = fitted_height(text, cell)
+        lines = [text] if height > MIN_TEXT_H else wrap_to_width(text, cell, MIN_TEXT_H)
+        for j, line in enumerate(lines):
+            psp.add_text(line, height=height, dxfattribs={"layer": "TITLE"}).set_placement(
+                (x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h + (len(lines) - 1 - j) * (height + 1.5)))
 
 
 def save_dxf(doc, path: Path) -> None:
