@@ -56,8 +56,8 @@ from pathlib import Path
 import numpy as np
 
 from prs_geom._version import __version__
-from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, dim_override, part_notes,
-                                    scale_text, title_block, use_drawing_font, wrap_to_width)
+from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, a3_paper_space, dim_override,
+                                    part_notes, save_dxf, scale_text, title_block, use_drawing_font, wrap_to_width)
 from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.datum import DatumMark, datum_mark
 from prs_geom.geometry.frames import FIRST_MID_PITCHES, part_warps, screw_z_range, thread_length
@@ -323,12 +323,7 @@ def build_drawing(design: PRSDesign, contact, part: str, date: str, version: str
                                      (rt + 0.5 * p) * math.sin(math.radians(ang))),
                            override={**ovd, "dimtoh": 1}, dxfattribs={"layer": "DIMENSIONS"}).render()
     # -- paper space
-    psp = doc.layouts.get("Layout1")
-    doc.layouts.rename("Layout1", f"A3_{part.upper()}")
-    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
-    fx0, fy0, fx1, fy1 = FRAME
-    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
-                       dxfattribs={"layer": "TITLE", "const_width": 0.7})
+    psp = a3_paper_space(doc, f"A3_{part.upper()}")
     vx0, vy0, vx1, vy1 = MAIN_VP
     vw, vh = vx1 - vx0, vy1 - vy0
     # window centre: the part plus the diameter dimensions on the right and datum A on the left
@@ -500,8 +495,6 @@ def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,
     :class:`~prs_geom.analysis.contact.ContactResult` (theoretical screw);
     ``progress(stage, done, total)`` after each drawing and the PDF. Returns the file names
     written."""
-    from prs_geom.exports.sheet import save_dxf
-
     out = Path(out_dir)
     names, docs = [], []
     total = len(PARTS) + len(extra or {}) + (1 if pdf else 0)

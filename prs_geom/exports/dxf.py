@@ -152,15 +152,10 @@ VIEWPORT = (25.0, 80.0, 405.0, 280.0)
 def _sheet(doc, design: PRSDesign, ext: Any, date: str) -> None:
     """The A3 paper space: frame, one viewport on every view at the largest scale of
     (2, 1, 1/2, 1/5, 1/10) that fits, the title block."""
-    from prs_geom.exports.sheet import FRAME, SHEET, scale_text, title_block
+    from prs_geom.exports.sheet import a3_paper_space, scale_text, title_block
     from prs_geom.model.io import design_hash
 
-    psp = doc.layouts.get("Layout1")
-    doc.layouts.rename("Layout1", "A3_PROFILES")
-    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
-    fx0, fy0, fx1, fy1 = FRAME
-    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
-                       dxfattribs={"layer": "ANNOTATION", "const_width": 0.7})
+    psp = a3_paper_space(doc, "A3_PROFILES", frame_layer="ANNOTATION")
     vx0, vy0, vx1, vy1 = VIEWPORT
     w, h = ext.extmax[0] - ext.extmin[0], ext.extmax[1] - ext.extmin[1]
     scale = next((s for s in (2.0, 1.0, 0.5, 0.2, 0.1) if w * s <= vx1 - vx0 and h * s <= vy1 - vy0), 0.05)

@@ -30,8 +30,8 @@ from typing import Any
 
 from prs_geom._version import __version__
 from prs_geom.exports.drawing import _hatch, _new_doc, _stamp
-from prs_geom.exports.sheet import (FRAME, SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, dim_override, part_notes, scale_text,
-                                    title_block, wrap_to_width)
+from prs_geom.exports.sheet import (SHEET, TEXT_H, TITLE_BLOCK, TITLE_H, a3_paper_space, dim_override, part_notes,
+                                    scale_text, title_block, wrap_to_width)
 from prs_geom.exports.textsafe import dxf_text
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.model.design import PRSDesign
@@ -63,12 +63,7 @@ def _sheet(doc, name: str, design: PRSDesign, title: str, rows: list[tuple[str, 
     from ezdxf import bbox
 
     msp = doc.modelspace()
-    psp = doc.layouts.get("Layout1")
-    doc.layouts.rename("Layout1", name)
-    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
-    fx0, fy0, fx1, fy1 = FRAME
-    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
-                       dxfattribs={"layer": "TITLE", "const_width": 0.7})
+    psp = a3_paper_space(doc, name)
     vx0, vy0, vx1, vy1 = VIEW
     k = 1.0 / scale
     psp.add_viewport(center=(0.5 * (vx0 + vx1), 0.5 * (vy0 + vy1)), size=(vx1 - vx0, vy1 - vy0),

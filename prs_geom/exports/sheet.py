@@ -14,7 +14,7 @@ import functools
 from pathlib import Path
 
 __all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "MIN_TEXT_H", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK",
-           "TITLE_H", "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
+           "TITLE_H", "a3_paper_space", "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
            "scale_text", "title_block", "use_drawing_font", "wrap_to_width"]
 
 SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
@@ -92,6 +92,18 @@ def fitted_height(text: str, width_mm: float, height_mm: float = TEXT_H) -> floa
 
     wide = fonts.make_font(pin_drawing_font(), height_mm, 1.0).text_width(text)
     return height_mm if wide <= width_mm else MIN_TEXT_H
+
+
+def a3_paper_space(doc, name: str, frame_layer: str = "TITLE"):
+    """``doc``'s paper space renamed ``name``, set up as an A3 landscape page (no margins,
+    mm) with the :data:`FRAME` drawn 0.7 mm wide on ``frame_layer``; returned."""
+    psp = doc.layouts.get("Layout1")
+    doc.layouts.rename("Layout1", name)
+    psp.page_setup(size=SHEET, margins=(0, 0, 0, 0), units="mm", name="ISO_A3_(420.00_x_297.00_MM)")
+    fx0, fy0, fx1, fy1 = FRAME
+    psp.add_lwpolyline([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], close=True,
+                       dxfattribs={"layer": frame_layer, "const_width": 0.7})
+    return psp
 
 
 def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:

@@ -137,17 +137,11 @@ def envelope_shapes(design: Any) -> dict[str, Any]:
 
 def bolt_shape(env: Any) -> Any:
     """A flange bolt's envelope (:class:`~prs_geom.mesh.actuator.BoltEnvelope`) as an exact
-    solid in its own frame: its (r, z) outline revolved about z (planes and cylinders)."""
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
-    from OCP.BRepPrimAPI import BRepPrimAPI_MakeRevol
-    from OCP.gp import gp_Ax1, gp_Dir, gp_Pnt
+    solid in its own frame: its (r, z) outline revolved about z (planes and cylinders,
+    :func:`prs_geom.exports.step._revolved`)."""
+    from prs_geom.exports.step import _revolved
 
-    poly = BRepBuilderAPI_MakePolygon()
-    for r, z in env.profile():
-        poly.Add(gp_Pnt(r, 0.0, z))
-    poly.Close()
-    face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
-    return BRepPrimAPI_MakeRevol(face, gp_Ax1(gp_Pnt(0.0, 0.0, 0.0), gp_Dir(0.0, 0.0, 1.0)), 2.0 * math.pi).Shape()
+    return _revolved(env.profile())
 
 
 def key_shape(env: Any) -> Any:
