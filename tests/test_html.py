@@ -149,13 +149,15 @@ def test_vendored_three_js_equals_the_npm_package():
 #: Chromium's virtual time run out, and --dump-dom then waits for the process timeout.
 STOP_PLAY = """<script>
 window.addEventListener('load', function () {
+  // written on every frame, so a slow (loaded) machine still leaves the count it reached;
+  // stops the animation once three keys were seen (or after 240 frames) so the page idles
   let frames = 0; const keys = new Set();
   function count() {
     const k = document.body.dataset.animationKey;
     if (k !== undefined) keys.add(k);
-    if (++frames < 12) { requestAnimationFrame(count); return; }
-    document.getElementById('play').checked = false;
     document.body.dataset.keysSeen = String(keys.size);
+    if (keys.size < 3 && ++frames < 240) { requestAnimationFrame(count); return; }
+    document.getElementById('play').checked = false;
   }
   requestAnimationFrame(count);
 });
@@ -170,13 +172,13 @@ def test_view_runs_the_mechanism(report_html, tmp_path):
     page = tmp_path / "play" / "report.html"
     page.parent.mkdir()
     page.write_text(text[:i] + STOP_PLAY + text[i:], encoding="utf-8")
-    r = chromium(["--dump-dom", page.as_uri() + "#play"], tmp_path, budget_ms=5000)
+    r = chromium(["--dump-dom", page.as_uri() + "#play"], tmp_path, budget_ms=10000)
     assert r.returncode == 0, r.stderr[-2000:]
     body = r.stdout[r.stdout.index("<body"):r.stdout.index(">", r.stdout.index("<body")) + 1]
     assert 'data-viewer="ok"' in body and "data-errors" not in body
     key = int(body.split('data-animation-key="')[1].split('"')[0])
     assert 0 < key <= 72
-    # 12 frames at 60 per s of a 4 s revolution of 72 keys: about 4 distinct keys
+    # a 4 s revolution of 72 keys gives a new key every 1/18 s: three within a few frames
     assert int(body.split('data-keys-seen="')[1].split('"')[0]) >= 3
 
 
