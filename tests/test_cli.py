@@ -77,6 +77,10 @@ INVALID = {
     "nut.major_diameter_mm": bad_size,
     "nut.minor_diameter_mm": bad_size,
     "nut.pitch_list_mm": bad_pitch_list(),
+    # a hole zone on an external feature, a shaft zone on an internal one, not a zone at all
+    "screw.pitch_diameter_tolerance": st.sampled_from(["H6", "h", "6h", "zz9", 6, ""]),
+    "roller.pitch_diameter_tolerance": st.sampled_from(["H5", "h99", "k", 5.0]),
+    "nut.pitch_diameter_tolerance": st.sampled_from(["h6", "H", "q6", 6]),
     **{f"materials.{part}.youngs_modulus_mpa": out_of(1e3, 1e7) for part in MATERIAL_PARTS},
     **{f"materials.{part}.poisson_ratio": out_of(0.0, 0.5, hi_open=True) for part in MATERIAL_PARTS},
     **{f"materials.{part}.density_kg_m3": out_of(500.0, 25000.0) for part in MATERIAL_PARTS},
@@ -99,6 +103,10 @@ INVALID = {
     "gears.pressure_angle_deg": out_of(14.5, 30.0),
     "gears.backlash_mm": out_of(0.0, 1.0),
     "gears.face_width_mm": bad_size,
+    "gears.accuracy_grade": bad_int(1, 11),
+    "gears.thickness_tolerance_mm": out_of(0.001, 1.0),
+    "gears.tip_tolerance": st.sampled_from(["H11", "h", "x99", 11]),
+    "gears.ring_tip_tolerance": st.sampled_from(["h11", "H", 11.0]),
     # the [mechanism] section (layout rules that need the whole design are checked at build)
     "mechanism.enabled": st.one_of(st.integers(), st.text(max_size=3), st.floats(allow_nan=False)),
     # beyond the ISO 286 tables (500 mm) and not a DIN 472 bore (looked up at construction)

@@ -14,7 +14,7 @@ import functools
 from pathlib import Path
 
 __all__ = ["DRAWING_FONT", "FRAME", "GENERAL_TOLERANCES", "MIN_TEXT_H", "SHEET", "SURFACE_TEXTURE", "TEXT_H", "TITLE_BLOCK",
-           "TITLE_H", "a3_paper_space", "dim_override", "fitted_height", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
+           "TITLE_H", "a3_paper_space", "dim_override", "drawing_number", "fitted_height", "iso7200_rows", "material_note", "part_notes", "pin_drawing_font", "save_dxf",
            "scale_text", "title_block", "use_drawing_font", "wrap_to_width"]
 
 SHEET = (420.0, 297.0)                   # ISO A3 landscape (mm)
@@ -128,6 +128,34 @@ def title_block(psp, rows: list[tuple[str, str]], title: str) -> None:
         for j, line in enumerate(lines):
             psp.add_text(line, height=height, dxfattribs={"layer": "TITLE"}).set_placement(
                 (x0 + 1.5 + col * (xm - x0), yy + 0.3 * row_h + (len(lines) - 1 - j) * (height + 1.5)))
+
+
+def drawing_number(design, index: int) -> str:
+    """The drawing's identification number (ISO 7200): the design's name in capitals and
+    digits (other characters as "-", at most 24, "PRS" when none is left) and the sheet's
+    index, e.g. ``DEFAULT-01``. It stays with the design through its revisions."""
+    import re
+
+    stem = re.sub(r"[^A-Za-z0-9]+", "-", design.name).strip("-").upper()[:24].strip("-") or "PRS"
+    return f"{stem}-{index:02d}"
+
+
+def iso7200_rows(design, part: str, material, scale: str, date: str, version: str, index: int,
+                 sheets: int, kind: str = "Detail drawing") -> list[tuple[str, str]]:
+    """The title block's data fields (ISO 7200): design and part, material grade and heat
+    treatment, identification number (:func:`drawing_number`) and revision (the design hash:
+    a changed design is a new revision), document type, scale, date of issue, creator,
+    design sha256 and the sheet number n/N."""
+    from prs_geom.exports.textsafe import dxf_text
+    from prs_geom.model.io import design_hash
+
+    h = design_hash(design)
+    grade = dxf_text(material.grade) if material.grade else f"{dxf_text(material.name)}, grade not specified"
+    treatment = dxf_text(material.heat_treatment) if material.heat_treatment else "none specified"
+    return [("Design", dxf_text(design.name)), ("Part", part), ("Material", grade), ("Heat treatment", treatment),
+            ("Drawing no.", drawing_number(design, index)), ("Revision", h[:8]), ("Document type", kind),
+            ("Scale", scale), ("Date of issue", date), ("Creator", f"prs_geom {version}"),
+            ("Design sha256", h), ("Sheet", f"{index}/{sheets} A3")]
 
 
 def save_dxf(doc, path: Path) -> None:

@@ -42,7 +42,7 @@ from prs_geom.model.machine_elements import (ISO_4762_LENGTHS_MM, Bearing, Bolt,
                                              shaft_end, shaft_end_diameters, shaft_ring)
 from prs_geom.model.standards import StandardTableError
 
-__all__ = ["DESIGN_FILE", "ActuatorLayout", "NutMountLayout", "PlacedBearing", "ScrewEnd", "ShaftStep", "Sized",
+__all__ = ["DESIGN_FILE", "FLANGE_OVERLAP_MM", "ActuatorLayout", "NutMountLayout", "PlacedBearing", "ScrewEnd", "ShaftStep", "Sized",
            "StrokeEndCheck", "SupportSpans", "actuator_layout", "screw_thread_span", "stroke_end_checks",
            "support_spans"]
 
@@ -52,6 +52,9 @@ DESIGN_FILE = "design file"
 BOLT_SAFETY = 2.0
 #: A flange bolt engages this many bolt diameters of thread in the housing (steel or cast iron).
 BOLT_ENGAGEMENT = 1.5
+#: The nut flange reaches this far (mm) inside the nut end's outside radius, so that the two
+#: overlap instead of meeting in one (differently sampled) cylinder (mesh, STEP and drawing).
+FLANGE_OVERLAP_MM = 0.5
 #: The bearing seat steps down at least this much (mm on the diameter) below the screw root,
 #: so that the thread's grinding never touches the seat.
 SEAT_STEP_MM = 1.0

@@ -50,7 +50,7 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from prs_geom.geometry.actuator import ActuatorLayout, ScrewEnd
+from prs_geom.geometry.actuator import FLANGE_OVERLAP_MM, ActuatorLayout, ScrewEnd
 from prs_geom.geometry.mechanism import MechanismLayout
 from prs_geom.mesh.mechanism import MECHANISM_CHORD_MM, _circle, _extruded, _trimesh, segments
 from prs_geom.model.design import PRSDesign
@@ -67,9 +67,6 @@ RUN_OUT_INSET_MM = 0.01
 #: The DIN 471 ring's modelled envelope reaches this far (mm) beyond the shaft's radius (the
 #: ring's radial section above the shaft, without its lugs).
 SHAFT_RING_RIM_MM = 1.5
-#: The nut flange reaches this far (mm) inside the nut end's outside radius, so that the two
-#: overlap instead of meeting in one (differently sampled) cylinder.
-FLANGE_OVERLAP_MM = 0.5
 #: Cutters overshoot the faces they open by this much (mm), so no cut face is coplanar.
 PAD_MM = 1.0
 _PAD_MM = PAD_MM

@@ -111,6 +111,24 @@ class Thread:
         return 1 if self.hand == "right" else -1
 
 
+def iso286_zone(fld: str, value: Any, internal: bool) -> str:
+    """An ISO 286 tolerance zone symbol for a feature of one kind: a hole zone (capital
+    letter, ``internal``) or a shaft zone (small letter), tabulated at some size."""
+    from prs_geom.model.standards import tolerance_zone
+
+    kind, letter = ("hole", "a capital letter, e.g. \"H6\"") if internal else ("shaft", "a small letter, e.g. \"h6\"")
+    if not isinstance(value, str):
+        raise DesignError(fld, value, f"must be an ISO 286 {kind} zone: {letter}")
+    try:
+        tolerance_zone(10.0, value)
+    except (ValueError, TypeError) as exc:
+        raise DesignError(fld, value, f"must be an ISO 286 {kind} zone, {letter}: {exc}") from None
+    if value[0].isupper() != internal:
+        raise DesignError(fld, value, f"must be an ISO 286 {kind} zone: {letter} (the feature is "
+                                      f"{'internal' if internal else 'external'})")
+    return value
+
+
 @dataclass(frozen=True)
 class Screw:
     """The screw: external, multi-start, constant pitch.
@@ -120,7 +138,8 @@ class Screw:
     defaults, for an actuator, to what the nut assembly, the stroke, the over-travels and the
     run-outs need (:func:`prs_geom.geometry.actuator.actuator_layout`; it stays None here)
     and otherwise to the engaged length n p plus four pitches. Diameters are sizes (0.01 to 10000 mm), the
-    length an axial length (0.01 to 1e7 mm, at least n p).
+    length an axial length (0.01 to 1e7 mm, at least n p). ``pitch_diameter_tolerance``:
+    the ISO 286 shaft zone the drawing gives the (theoretical) pitch diameter.
     """
 
     pitch_diameter_mm: float = 24.0
@@ -128,6 +147,7 @@ class Screw:
     major_diameter_mm: float | None = None
     minor_diameter_mm: float | None = None
     length_mm: float | None = None
+    pitch_diameter_tolerance: str = "h6"
 
     def __post_init__(self) -> None:
         _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
@@ -135,6 +155,7 @@ class Screw:
         for name in ("major_diameter_mm", "minor_diameter_mm"):
             _set(self, name, optional_size(name, getattr(self, name)))
         _set(self, "length_mm", optional_length("length_mm", self.length_mm))
+        iso286_zone("pitch_diameter_tolerance", self.pitch_diameter_tolerance, internal=False)
 
 
 @dataclass(frozen=True)
@@ -144,6 +165,7 @@ class Roller:
     ``arc_radius_mm`` is the flank arc radius r_T (arc centred on the roller axis);
     default r_r / sin(beta), tangent to a beta flank at the pitch radius.
     ``pitch_list_mm`` holds n - 1 tooth-to-tooth axial distances; absent = constant pitch.
+    ``pitch_diameter_tolerance``: the ISO 286 shaft zone of the pitch diameter on the drawing.
     """
 
     pitch_diameter_mm: float = 8.0
@@ -152,6 +174,7 @@ class Roller:
     major_diameter_mm: float | None = None
     minor_diameter_mm: float | None = None
     pitch_list_mm: tuple[float, ...] | None = None
+    pitch_diameter_tolerance: str = "h5"
 
     def __post_init__(self) -> None:
         _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
@@ -159,6 +182,7 @@ class Roller:
         for name in ("arc_radius_mm", "major_diameter_mm", "minor_diameter_mm"):
             _set(self, name, optional_size(name, getattr(self, name)))
         _set(self, "pitch_list_mm", pitch_list("pitch_list_mm", self.pitch_list_mm))
+        iso286_zone("pitch_diameter_tolerance", self.pitch_diameter_tolerance, internal=False)
 
 
 @dataclass(frozen=True)
@@ -167,6 +191,7 @@ class Nut:
 
     For this internal thread ``major_diameter_mm`` is the groove root and
     ``minor_diameter_mm`` the crest (bore). ``outer_diameter_mm`` is the body D0.
+    ``pitch_diameter_tolerance``: the ISO 286 hole zone of the pitch diameter on the drawing.
     """
 
     pitch_diameter_mm: float = 40.0
@@ -175,6 +200,7 @@ class Nut:
     major_diameter_mm: float | None = None
     minor_diameter_mm: float | None = None
     pitch_list_mm: tuple[float, ...] | None = None
+    pitch_diameter_tolerance: str = "H6"
 
     def __post_init__(self) -> None:
         _set(self, "pitch_diameter_mm", size("pitch_diameter_mm", self.pitch_diameter_mm))
@@ -183,6 +209,7 @@ class Nut:
         for name in ("major_diameter_mm", "minor_diameter_mm"):
             _set(self, name, optional_size(name, getattr(self, name)))
         _set(self, "pitch_list_mm", pitch_list("pitch_list_mm", self.pitch_list_mm))
+        iso286_zone("pitch_diameter_tolerance", self.pitch_diameter_tolerance, internal=True)
 
 
 @dataclass(frozen=True)
@@ -472,6 +499,12 @@ class GearSettings:
     gear) and the face width (none: two thread pitches). Profile shift and the ring
     addendum follow from the rule of :func:`prs_geom.geometry.gear_pair.default_gear_pair`.
     ``enabled = false`` leaves the gears out of meshes, checks and report.
+
+    For the drawings: ``accuracy_grade``, the ISO 1328-1 flank tolerance class (1 to 11);
+    ``thickness_tolerance_mm``, the tooth thickness tolerance T_sn below the thinned
+    (backlash) tooth, which gives the lower deviation of the span and over-pins sizes;
+    ``tip_tolerance`` and ``ring_tip_tolerance``, the ISO 286 zones of the roller gear's tip
+    diameter (a shaft zone) and of the ring gear's (a hole zone).
     """
 
     enabled: bool = True
@@ -479,6 +512,10 @@ class GearSettings:
     pressure_angle_deg: float = 20.0
     backlash_mm: float = 0.04
     face_width_mm: float | None = None
+    accuracy_grade: int = 6
+    thickness_tolerance_mm: float = 0.02
+    tip_tolerance: str = "h11"
+    ring_tip_tolerance: str = "H11"
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
@@ -488,6 +525,11 @@ class GearSettings:
                                                  "must be from 14.5 to 30 deg"))
         _set(self, "backlash_mm", bounded("backlash_mm", self.backlash_mm, 0.0, 1.0, "must be from 0 to 1 mm"))
         _set(self, "face_width_mm", optional_size("face_width_mm", self.face_width_mm))
+        integer("accuracy_grade", self.accuracy_grade, 1, 11)
+        _set(self, "thickness_tolerance_mm", bounded("thickness_tolerance_mm", self.thickness_tolerance_mm, 0.001,
+                                                     1.0, "must be from 0.001 to 1 mm"))
+        iso286_zone("tip_tolerance", self.tip_tolerance, internal=False)
+        iso286_zone("ring_tip_tolerance", self.ring_tip_tolerance, internal=True)
 
 
 #: How the carriers are held radially (docs/theory/mechanism.md): running clear of the screw

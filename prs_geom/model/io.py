@@ -77,6 +77,13 @@ FIELD_COMMENTS: dict[str, str] = {
     "gears.pressure_angle_deg": "gear pressure angle alpha (deg)",
     "gears.backlash_mm": "total circumferential backlash of each roller/ring gear pair (mm)",
     "gears.face_width_mm": "gear face width (mm); omit for two thread pitches",
+    "gears.accuracy_grade": "ISO 1328-1 flank tolerance class of the gears on the drawings (1 to 11)",
+    "gears.thickness_tolerance_mm": "tooth thickness tolerance T_sn below the thinned tooth (mm): lower deviation of W_k and over-pins",
+    "gears.tip_tolerance": 'ISO 286 shaft zone of the roller gear tip diameter (e.g. "h11")',
+    "gears.ring_tip_tolerance": 'ISO 286 hole zone of the ring gear tip diameter (e.g. "H11")',
+    "screw.pitch_diameter_tolerance": 'ISO 286 shaft zone of the screw pitch diameter on its drawing (e.g. "h6")',
+    "roller.pitch_diameter_tolerance": 'ISO 286 shaft zone of the roller pitch diameter on its drawing (e.g. "h5")',
+    "nut.pitch_diameter_tolerance": 'ISO 286 hole zone of the nut pitch diameter on its drawing (e.g. "H6")',
     "thermal_expansion_per_k": "linear thermal expansion coefficient alpha (1/K)",
     "density_kg_m3": "density (kg/m^3), for the masses of the parts list",
     **{f"materials.{part}.name": "material name printed in the parts list"
