@@ -323,6 +323,57 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
     a = design.centre_distance_mm
     z = design.roller.count
 
+    d_j, journal = _journal(design, pair)
+    t_c = m.carrier_thickness_mm or _ceil_to(1.5 * d_j, 0.5)
+    c_r = m.carrier_radial_clearance_mm
+    r_in = 0.5 * design.screw.major_diameter_mm + c_r
+    r_bore = 0.5 * journal.hole_diameter_mm
+    if a - r_bore - r_in < MIN_CARRIER_WEB_MM:
+        raise DesignError("mechanism.journal_diameter_mm", d_j,
+                          f"leaves a carrier web of {a - r_bore - r_in:.3g} mm between the journal bore and "
+                          f"the carrier bore (centre distance {a:g} mm, carrier bore radius {r_in:.4g} mm = "
+                          f"screw crest + mechanism.carrier_radial_clearance_mm); at least "
+                          f"{MIN_CARRIER_WEB_MM} mm is needed: choose a smaller journal")
+    # carrier outside: the journal bores plus a web as wide as the inner one, at least 0.5 d_j
+    web = max(MIN_CARRIER_WEB_MM, 0.5 * d_j, a - r_bore - r_in)
+    r_out_min = a + r_bore + web
+    guided = m.carrier_guidance == "nut"
+    ring = _ring(design, r_out_min, c_r, guided)
+    d1 = ring.bore_mm
+    carrier_fit = _fit_check("carrier in nut bore", m.carrier_fit, d1) if guided else None
+    r_out = 0.5 * carrier_fit.shaft_diameter_mm if carrier_fit else 0.5 * d1 - c_r
+    if r_out < r_out_min - 1e-9:
+        raise DesignError("mechanism.ring_bore_mm", d1,
+                          f"leaves the carrier an outside radius of {r_out:.4g} mm, below the {r_out_min:.4g} mm "
+                          f"its journal bores need: choose a larger DIN 472 size")
+    bore_radius = 0.5 * (carrier_fit.hole_diameter_mm if carrier_fit else d1)
+    # the ring's narrowest radial section b, measured from the bore
+    ring_inner = 0.5 * d1 - ring.section_width_mm
+    if ring_inner >= r_out:
+        raise DesignError("mechanism.ring_bore_mm", d1,
+                          f"the DIN 472 ring's inner edge (r = {ring_inner:.4g} mm) does not reach over the "
+                          f"carrier (outside r = {r_out:.4g} mm): it would not hold it")
+    g, c = m.roller_end_play_mm, m.ring_play_mm
+    s = ring.thickness_mm
+    if R_o - 0.5 * ring.groove_diameter_mm < MIN_CARRIER_WEB_MM:
+        raise DesignError("nut.outer_diameter_mm", design.nut.outer_diameter_mm,
+                          f"leaves {R_o - 0.5 * ring.groove_diameter_mm:.3g} mm of wall outside the retaining "
+                          f"ring groove (d2 = {ring.groove_diameter_mm:g} mm); at least {MIN_CARRIER_WEB_MM} mm")
+
+    ends = _end_layouts(L, w, g, t_c, c, ring)
+    stack = _stack_up(design, ends, L, w, t_c, g, c, s)
+    return MechanismLayout(
+        gear_face_width_mm=w, ring_gear_outer_radius_mm=ring_gear_outer, journal_diameter_mm=d_j,
+        journal_fit=journal, carrier_inner_radius_mm=r_in, carrier_outer_radius_mm=r_out,
+        carrier_thickness_mm=t_c, carrier_fit=carrier_fit, centre_distance_mm=a, roller_count=z,
+        ring=ring, ring_inner_radius_mm=ring_inner, nut_bore_radius_mm=bore_radius,
+        nut_outer_radius_mm=R_o, ends=ends, stack=stack)
+
+
+def _journal(design: PRSDesign, pair) -> tuple[float, FitCheck]:
+    """The roller journal's diameter (given, or 0.6 x the roller root rounded down to 0.5 mm)
+    and its fit in the carrier bore."""
+    m = design.mechanism
     roller_root = design.roller.minor_diameter_mm
     if pair is not None:
         roller_root = min(roller_root, 2.0 * pair.pinion.root_radius_mm)
@@ -340,20 +391,13 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
                           f"the journal fit mechanism.journal_fit = \"{m.journal_fit}\" has no value at this "
                           f"diameter ({exc}; {_ISO286_RANGE}): give a smaller mechanism.journal_diameter_mm",
                           j_note) from None
-    t_c = m.carrier_thickness_mm or _ceil_to(1.5 * d_j, 0.5)
-    c_r = m.carrier_radial_clearance_mm
-    r_in = 0.5 * design.screw.major_diameter_mm + c_r
-    r_bore = 0.5 * journal.hole_diameter_mm
-    if a - r_bore - r_in < MIN_CARRIER_WEB_MM:
-        raise DesignError("mechanism.journal_diameter_mm", d_j,
-                          f"leaves a carrier web of {a - r_bore - r_in:.3g} mm between the journal bore and "
-                          f"the carrier bore (centre distance {a:g} mm, carrier bore radius {r_in:.4g} mm = "
-                          f"screw crest + mechanism.carrier_radial_clearance_mm); at least "
-                          f"{MIN_CARRIER_WEB_MM} mm is needed: choose a smaller journal")
-    # carrier outside: the journal bores plus a web as wide as the inner one, at least 0.5 d_j
-    web = max(MIN_CARRIER_WEB_MM, 0.5 * d_j, a - r_bore - r_in)
-    r_out_min = a + r_bore + web
-    guided = m.carrier_guidance == "nut"
+    return d_j, journal
+
+
+def _ring(design: PRSDesign, r_out_min: float, c_r: float, guided: bool) -> RetainingRing:
+    """The DIN 472 ring: the given size, or the smallest whose bore takes the carrier (its
+    outside radius ``r_out_min`` plus the radial clearance ``c_r`` unless it is guided)."""
+    m = design.mechanism
     if m.ring_bore_mm is not None:
         d1 = m.ring_bore_mm
         try:
@@ -371,26 +415,14 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
                               f"{max(din472_sizes()):g} mm; the table ends there): reduce screw.pitch_diameter_mm "
                               f"and roller.pitch_diameter_mm, or leave the mechanism out (mechanism.enabled = false)")
         ring = din472_ring(sizes[0])
-    d1 = ring.bore_mm
-    carrier_fit = _fit_check("carrier in nut bore", m.carrier_fit, d1) if guided else None
-    r_out = 0.5 * carrier_fit.shaft_diameter_mm if carrier_fit else 0.5 * d1 - c_r
-    if r_out < r_out_min - 1e-9:
-        raise DesignError("mechanism.ring_bore_mm", d1,
-                          f"leaves the carrier an outside radius of {r_out:.4g} mm, below the {r_out_min:.4g} mm "
-                          f"its journal bores need: choose a larger DIN 472 size")
-    bore_radius = 0.5 * (carrier_fit.hole_diameter_mm if carrier_fit else d1)
-    # the ring's narrowest radial section b, measured from the bore
-    ring_inner = 0.5 * d1 - ring.section_width_mm
-    if ring_inner >= r_out:
-        raise DesignError("mechanism.ring_bore_mm", d1,
-                          f"the DIN 472 ring's inner edge (r = {ring_inner:.4g} mm) does not reach over the "
-                          f"carrier (outside r = {r_out:.4g} mm): it would not hold it")
-    g, c = m.roller_end_play_mm, m.ring_play_mm
+    return ring
+
+
+def _end_layouts(L: float, w: float, g: float, t_c: float, c: float,
+                 ring: RetainingRing) -> tuple[EndLayout, EndLayout]:
+    """Both ends' axial positions from the thread ends outward: gear, end play ``g``,
+    carrier ``t_c``, ring play ``c``, ring in its groove, the groove's edge distance."""
     s, m_w, n_e = ring.thickness_mm, ring.groove_width_mm, ring.edge_distance_mm
-    if R_o - 0.5 * ring.groove_diameter_mm < MIN_CARRIER_WEB_MM:
-        raise DesignError("nut.outer_diameter_mm", design.nut.outer_diameter_mm,
-                          f"leaves {R_o - 0.5 * ring.groove_diameter_mm:.3g} mm of wall outside the retaining "
-                          f"ring groove (d2 = {ring.groove_diameter_mm:g} mm); at least {MIN_CARRIER_WEB_MM} mm")
 
     def end(outward: int) -> EndLayout:
         base = 0.0 if outward < 0 else L            # the thread end
@@ -406,7 +438,13 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         nut_end = span(0.0, w + g + t_c + c + s + n_e)
         return EndLayout(outward, gear, journal, carrier, ring_z, groove, nut_end)
 
-    ends = (end(-1), end(+1))
+    return (end(-1), end(+1))
+
+
+def _stack_up(design: PRSDesign, ends: tuple[EndLayout, EndLayout], L: float, w: float, t_c: float, g: float,
+              c: float, s: float) -> StackUp:
+    """The axial stack-up (:class:`StackUp`) with each length's ISO 286 zone."""
+    m = design.mechanism
     lo, hi = ends[0], ends[1]
     groove_span = hi.groove[1] - lo.groove[0]
     roller_len = L + 2.0 * w
@@ -429,12 +467,7 @@ def layout(design: PRSDesign) -> MechanismLayout | None:
         _stack_dimension(design, "roller length between gear faces", "the roller length between its gear faces is",
                          roller_len, tol, -1, 1, [thread, gears_w]),
     ))
-    return MechanismLayout(
-        gear_face_width_mm=w, ring_gear_outer_radius_mm=ring_gear_outer, journal_diameter_mm=d_j,
-        journal_fit=journal, carrier_inner_radius_mm=r_in, carrier_outer_radius_mm=r_out,
-        carrier_thickness_mm=t_c, carrier_fit=carrier_fit, centre_distance_mm=a, roller_count=z,
-        ring=ring, ring_inner_radius_mm=ring_inner, nut_bore_radius_mm=bore_radius,
-        nut_outer_radius_mm=R_o, ends=ends, stack=stack)
+    return stack
 
 
 def check_layout(design: PRSDesign) -> MechanismLayout | None:

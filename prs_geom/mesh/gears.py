@@ -107,21 +107,34 @@ def gear_mesh(gear: SpurGear, z0: float, z1: float, chord_tol_mm: float = 1e-3, 
                           "triangulation needs every ray from the axis to meet it once")
     rot = rotation_2d(phase_rad)
     if not gear.internal:
-        P = outline @ rot.T
-        n = len(P)
-        V = np.concatenate([
-            np.column_stack([P, np.full(n, z0)]),
-            np.column_stack([P, np.full(n, z1)]),
-            [[0.0, 0.0, z0], [0.0, 0.0, z1]],
-        ])
-        lo, hi = np.arange(n), np.arange(n, 2 * n)
-        i = np.arange(n)
-        k = (i + 1) % n
-        bottom = np.stack([np.full(n, 2 * n), lo[k], lo[i]], axis=1)     # normal -z
-        top = np.stack([np.full(n, 2 * n + 1), hi[i], hi[k]], axis=1)    # normal +z
-        F = np.concatenate([_prism_walls(n, lo, hi, True), bottom, top])
-        return V, F.astype(np.int64)
+        return _external_gear_mesh(outline @ rot.T, z0, z1)
+    return _ring_gear_mesh(gear, outline, rot, z0, z1, chord_tol_mm, outer_radius_mm)
 
+
+def _external_gear_mesh(P: NDArray[np.float64], z0: float,
+                        z1: float) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`gear_mesh` of an external gear: the placed outline ``P`` (n, 2) as a prism
+    between z0 and z1, its caps fanned from the two axis points."""
+    n = len(P)
+    V = np.concatenate([
+        np.column_stack([P, np.full(n, z0)]),
+        np.column_stack([P, np.full(n, z1)]),
+        [[0.0, 0.0, z0], [0.0, 0.0, z1]],
+    ])
+    lo, hi = np.arange(n), np.arange(n, 2 * n)
+    i = np.arange(n)
+    k = (i + 1) % n
+    bottom = np.stack([np.full(n, 2 * n), lo[k], lo[i]], axis=1)     # normal -z
+    top = np.stack([np.full(n, 2 * n + 1), hi[i], hi[k]], axis=1)    # normal +z
+    F = np.concatenate([_prism_walls(n, lo, hi, True), bottom, top])
+    return V, F.astype(np.int64)
+
+
+def _ring_gear_mesh(gear: SpurGear, outline: NDArray[np.float64], rot: NDArray[np.float64], z0: float, z1: float,
+                    chord_tol_mm: float,
+                    outer_radius_mm: float | None) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`gear_mesh` of a ring gear: the tooth outline and the body circle on one common
+    set of angles, joined by radial quads in the caps."""
     if outer_radius_mm is None:
         raise DesignError("outer_radius_mm", outer_radius_mm, "is required for a ring gear (its body radius)")
     R = float(outer_radius_mm)
