@@ -150,7 +150,8 @@ def iso7200_rows(design, part: str, material, scale: str, date: str, version: st
     from prs_geom.model.io import design_hash
 
     h = design_hash(design)
-    grade = dxf_text(material.grade) if material.grade else f"{dxf_text(material.name)}, grade not specified"
+    # the grade where the design gives one, else the material's name (the notes say what to set)
+    grade = dxf_text(material.grade) if material.grade else dxf_text(material.name)
     treatment = dxf_text(material.heat_treatment) if material.heat_treatment else "none specified"
     return [("Design", dxf_text(design.name)), ("Part", part), ("Material", grade), ("Heat treatment", treatment),
             ("Drawing no.", drawing_number(design, index)), ("Revision", h[:8]), ("Document type", kind),
