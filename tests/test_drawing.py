@@ -567,6 +567,7 @@ def test_thread_gear_and_pitch_tables_equal_the_design_and_report(sheet_set):
         assert cells["Pressure angle"] == f"{rep['pressure_angle_deg']:g}\u00b0"
         assert float(cells["Profile shift x"]) == pytest.approx(rep["profile_shift"], abs=5e-5)
         assert cells["Accuracy"] == f"ISO 1328-1 class {d.gears.accuracy_grade}"
+        assert cells["Reference dia. d"] == f"({rep['pitch_diameter_mm']:.4f})"     # a reference dimension
         cos_a = math.cos(math.radians(rep["pressure_angle_deg"]))
         k = rep["span_teeth"]
         span = re.fullmatch(r"([\d.]+) \(([^/]+)/([^)]+)\)", cells[f"Span W{k} ({k} teeth)"])

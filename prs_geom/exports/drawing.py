@@ -182,6 +182,8 @@ def gear_table(design: PRSDesign, part: str) -> list[tuple[str, str]]:
     return [("Module m", f"{g.module_mm:g} mm"), ("Teeth z", f"{g.teeth}"),
             ("Pressure angle", f"{g.pressure_angle_deg:g}\u00b0"), ("Profile shift x", f"{g.profile_shift + 0.0:+.4f}"),
             ("Face width", f"{g.face_width_mm:g} mm"),
+            # in parentheses: a reference dimension (ISO 129-1), for information, not inspected
+            ("Reference dia. d", f"({_mm(2.0 * g.pitch_radius_mm)})"),
             ("Tip diameter", f"\u00d8{_mm(tip)} {limits_text(sym, tolerance_zone(tip, sym))}"),
             ("Accuracy", f"ISO 1328-1 class {gs.accuracy_grade}"),
             (f"Span W{k} ({k} teeth)", limits(lambda x: x.span_measurement(k))),
@@ -429,7 +431,8 @@ def _notes(psp, design: PRSDesign, part: str, sec: PartSection, drive_note: str 
     n0 = sec.thread_z[0] - sec.datum_face_z
     notes = [f"Datum A: {face}; datum B{'-C' if len(sec.datum_axis) == 2 else ''}: the axis of the {axis}",
              f"Thread tooth 1 (loaded end, z = 0) at {n0:.2f} mm from datum A; teeth numbered from there",
-             "Geometric tolerances: prs_geom defaults for a precision PRS (ISO 1101, datums ISO 5459)"]
+             "Geometric tolerances: prs_geom defaults for a precision PRS (ISO 1101, datums ISO 5459); "
+             "values in parentheses are reference dimensions (ISO 129-1), not inspected"]
     if drive_note:
         notes.append(drive_note)
     notes += part_notes(getattr(design.materials, part), f"materials.{part}", "thread")

@@ -241,10 +241,15 @@ class Background:
         self._jobs = 0
 
     def __enter__(self) -> "Background":
+        self._first = _FirstSignalOnly()
+        self._first.install()
         return self
 
     def __exit__(self, exc_type: Any, *exc: object) -> None:
-        self.close(kill=exc_type is not None)
+        try:
+            self.close(kill=exc_type is not None)
+        finally:
+            self._first.restore()
 
     def submit(self, fn: Callable[..., Any], *args: Any, report_progress: bool = False, **kwargs: Any) -> Job:
         """Run ``fn(*args, **kwargs)`` in a worker (or later, in this process, without workers).
@@ -315,6 +320,44 @@ def _alive(pid: int) -> bool:
     except OSError:   # exists, another user's
         return True
     return True
+
+
+class _FirstSignalOnly:
+    """While a :class:`Background` block runs (main thread only): the first SIGINT or SIGTERM
+    goes to the handler that was there before (Python's KeyboardInterrupt, the CLI's
+    handler), and every one after it is ignored until the block has cleaned up.
+
+    A Ctrl-C to the process group reaches this process once directly and once more from each
+    worker that hands its copy on (module doc); those copies can land while the first
+    KeyboardInterrupt is still unwinding towards :meth:`Background.__exit__`, before
+    :meth:`Background.close` ignores signals, and would cut the clean-up short with a second
+    traceback."""
+
+    def __init__(self) -> None:
+        self.active = threading.current_thread() is threading.main_thread()
+        self._previous: dict[int, Any] = {}
+
+    def install(self) -> None:
+        if not self.active:
+            return
+        for sig in _FORWARDED:
+            self._previous[sig] = signal.signal(sig, self._handle)
+
+    def _handle(self, sig: int, frame: Any) -> None:
+        for other in self._previous:
+            signal.signal(other, signal.SIG_IGN)
+        previous = self._previous.get(sig)
+        if callable(previous):
+            previous(sig, frame)
+        elif previous == signal.SIG_DFL:
+            # the default action (end the process): restore it and take the signal again
+            signal.signal(sig, signal.SIG_DFL)
+            os.kill(os.getpid(), sig)
+
+    def restore(self) -> None:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+        self._previous = {}
 
 
 class signals_ignored:
