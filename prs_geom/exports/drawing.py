@@ -193,11 +193,9 @@ def gear_table(design: PRSDesign, part: str) -> list[tuple[str, str]]:
 def deviation_pair(upper: float, lower: float) -> str:
     """"upper/lower" deviations (mm) at four decimals (0.1 um, as span and pin sizes are
     measured), "0" for zero."""
-    def dev(mm: float) -> str:
-        tenths = round(mm * 1e4)
-        return "0" if tenths == 0 else f"{tenths / 1e4:+.4f}"
+    from prs_geom.exports.sheet_items import deviation_text
 
-    return f"{dev(upper)}/{dev(lower)}"
+    return f"{deviation_text(upper, 4)}/{deviation_text(lower, 4)}"
 
 
 def pitch_table(design: PRSDesign, part: str) -> list[tuple[str, str]] | str | None:

@@ -84,11 +84,11 @@ def dimension_text_width(override: dict, text: str, length: float) -> float:
     return width
 
 
-def deviation_text(mm: float) -> str:
-    """A limit deviation as the sheets print it: "0", or signed with three decimals (whole
-    micrometres, as ISO 286 tabulates them)."""
-    um = round(mm * 1000.0)
-    return "0" if um == 0 else f"{um / 1000.0:+.3f}"
+def deviation_text(mm: float, decimals: int = 3) -> str:
+    """A limit deviation as the sheets print it: "0", or signed with ``decimals`` decimals
+    (three: whole micrometres, as ISO 286 tabulates them)."""
+    steps = round(mm * 10 ** decimals)
+    return "0" if steps == 0 else f"{steps / 10 ** decimals:+.{decimals}f}"
 
 
 def limits_text(symbol: str, zone) -> str:

@@ -20,7 +20,7 @@ Pure geometry: numbers from the design and its layouts, no mesh and no file.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from prs_geom.geometry.frames import screw_z_range, thread_length
 from prs_geom.geometry.profiles import ThreadProfile, ThreadProfiles
@@ -93,7 +93,6 @@ class PartSection:
     datum_axis: tuple[str, ...]
     hollow: bool
     thread_z: tuple[float, float]
-    notes: tuple[str, ...] = field(default=())
 
     @property
     def z_span(self) -> tuple[float, float]:
