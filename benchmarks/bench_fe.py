@@ -12,9 +12,14 @@ teeth (what ``--compliance fe`` uses):
 3. the load analysis: ``analyse_loads`` with the FE model (model risk included) against the
    analytic one, as a ratio measured in the same run;
 4. without ``--quick``: the 7-tooth sections of the calibration studies and the convergence
-   study over levels 0, 1, 2 with the Richardson estimate (docs/theory/fe.md, Convergence).
+   study over levels 0, 1, 2 with the Richardson estimate (docs/theory/fe.md, Convergence);
+5. without ``--quick``: the section ends and the body treatment term by term (docs/theory/fe.md,
+   "What moves the answer"): the constant-pitch worst coefficient per side from the sections
+   cut at the engaged teeth with the 1D bars to the model, one change at a time; the end
+   teeth's tooth part against the interior; the worst coefficient for 2, 4 and 8 unloaded
+   periods.
 
-``--quick`` skips (4). Wall times on this machine are noisy; the ratios in (3) are the
+``--quick`` skips (4) and (5). Wall times on this machine are noisy; the ratios in (3) are the
 comparable numbers.
 """
 from __future__ import annotations
@@ -25,6 +30,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from prs_geom.analysis.contact import analyse_contact
@@ -75,16 +81,21 @@ def main(quick: bool = False) -> None:
         print(f"warm, fresh interpreter: {float(call) * 1e3:.1f} ms for the call (goal <= 0.5 s) after "
               f"{float(imports):.2f} s of imports and the contact stage; scikit-fem imported: {skfem}")
 
-        from prs_geom.analysis.fe.compliance import fe_load_model
-        from prs_geom.analysis.loads import build_model
 
-        analytic = build_model(design, contact)
-        fe = fe_load_model(analytic, cold.influence)
+        t0 = time.perf_counter()
+        alt = cached_influence(design, contact, folder=folder, extension=0)
+        print(f"the alternative's matrices (sections cut at the engaged teeth), cold: {time.perf_counter() - t0:.2f} s, "
+              f"a separate cache entry: {not any(alt.hits.values())}")
+        from prs_geom.pipeline import load_models
+
+        os.environ["PRS_GEOM_CACHE"] = tmp
+        models = load_models(design.with_changes(loads=replace(design.loads, compliance="fe")), contact)
+        analytic, fe = models.compare["analytic"], models.model
         t0 = time.perf_counter()
         analyse_loads(design, contact, model=analytic)
         t_a = time.perf_counter() - t0
         t0 = time.perf_counter()
-        analyse_loads(design, contact, model=fe, compare={"analytic": analytic, "fe": fe})
+        analyse_loads(design, contact, model=fe, **models.risk_options)
         t_f = time.perf_counter() - t0
         print(f"analyse_loads: analytic {t_a:.3f} s, FE with model risk {t_f:.3f} s: ratio {t_f / t_a:.2f}")
         print(f"cold matrices / analytic analyse_loads: {t_cold / t_a:.0f}")
@@ -101,6 +112,62 @@ def main(quick: bool = False) -> None:
             order = study.order[part]
             print(f"  {part:>7}: {study.finest_change[part] * 100:.3f} % (goal <= 0.5 %), order "
                   f"{np.nanmin(order):.2f}-{np.nanmax(order):.2f}, error <= {study.error_estimate[part].max() * 100:.3f} %")
+        decomposition(design, contact)
+
+
+def _worst(design, model) -> str:
+    from prs_geom.analysis.loads import forward
+
+    r = forward(design, model=model)
+    return f"{r.ldc_nr.max():.4f} / {r.ldc_rs.max():.4f}"
+
+
+def decomposition(design, contact, level: int = CONVERGED_LEVEL) -> None:
+    """(5): what each modelling choice does to the constant-pitch worst coefficient."""
+    from dataclasses import replace
+
+    from prs_geom.analysis.fe import InfluenceMatrices
+    from prs_geom.analysis.fe.compliance import ALTERNATIVES, FeVariant, body_scale, fe_load_model, pair_matrix
+    from prs_geom.analysis.loads import build_model
+
+    n = design.thread.engaged_teeth
+    t0 = time.perf_counter()
+    ext = influence_matrices(design, level=level, teeth=n, contact=contact)
+    cut = influence_matrices(design, level=level, teeth=n, contact=contact, extension=0)
+    print(f"section ends and bodies, level {level} ({time.perf_counter() - t0:.1f} s); constant-pitch worst "
+          f"coefficient nut-roller / roller-screw:")
+    analytic = build_model(design, contact)
+    one_d = FeVariant("1d", bodies="1d")
+    print(f"  analytic model                                     {_worst(design, analytic)}")
+    steps = [("FE cut at the engaged teeth, 1D bars (earlier model)", cut),
+             ("  + screw runs on past the nut", InfluenceMatrices(ext.screw, cut.roller, cut.nut)),
+             ("  + roller runs on past the nut", InfluenceMatrices(ext.screw, ext.roller, cut.nut)),
+             ("  + nut with its real ends", ext)]
+    for label, infl in steps:
+        print(f"  {label:<51}{_worst(design, fe_load_model(analytic, infl, one_d))}")
+    kappa = replace(analytic, body_screw=analytic.body_screw * body_scale(ext.screw),
+                    body_roller=analytic.body_roller * body_scale(ext.roller),
+                    body_nut=analytic.body_nut * body_scale(ext.nut),
+                    compliance=pair_matrix(ext, lambda pi: pi.tooth_matrix()))
+    print(f"  {'  + bars scaled to the FE body slope (kappa)':<51}{_worst(design, kappa)}")
+    print(f"  {'  + the rest of the FE bodies = the model':<51}{_worst(design, fe_load_model(analytic, ext))}")
+    for v in ALTERNATIVES:
+        infl = ext if v.extended else cut
+        print(f"  alternative {v.name:<39}{_worst(design, fe_load_model(analytic, infl, v))}")
+    print("  end teeth's tooth part T_jj against the interior (teeth 6-15), first / last tooth:")
+    for part in ext:
+        D = np.diag(part.tooth_matrix())
+        for b, flank in enumerate(part.flanks):
+            block = D[b * n:(b + 1) * n]
+            mid = block[5:15].mean()
+            cut_block = np.diag(getattr(cut, part.part).tooth_matrix())[b * n:(b + 1) * n]
+            cmid = cut_block[5:15].mean()
+            print(f"    {flank:<18} model {block[0] / mid - 1:+.2%} / {block[-1] / mid - 1:+.2%}   cut at the "
+                  f"engaged teeth {cut_block[0] / cmid - 1:+.2%} / {cut_block[-1] / cmid - 1:+.2%}")
+    print("  unloaded periods of the screw and the roller at each end:")
+    for e in (2, 4, 8):
+        infl = ext if e == 4 else influence_matrices(design, level=level, teeth=n, contact=contact, extension=e)
+        print(f"    {e}: {_worst(design, fe_load_model(analytic, infl))}")
 
 
 if __name__ == "__main__":

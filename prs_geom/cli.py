@@ -401,7 +401,17 @@ def cmd_loads(args: argparse.Namespace) -> int:
 
     models = _load_models(design, progress=progress)
     rep = loads_section(load_distribution(design, models.model, progress), models.cache_report)
+    risk = None
+    if models.compare:
+        from prs_geom.analysis.loads import model_risk
+
+        opts = models.risk_options
+        risk = model_risk(design, opts.pop("compare"), **opts)
     if args.json:
+        if risk is not None:
+            from prs_geom.exports.report import model_risk_section
+
+            rep["model_risk"] = model_risk_section(risk)
         _print_json(rep)
         return EXIT_OK
     print(f"design {design.name}: {rep['design_load_N']:.0f} N, {rep['installation']}, "
@@ -419,10 +429,8 @@ def cmd_loads(args: argparse.Namespace) -> int:
     sens = rep["sensitivity"]
     print(f"a {sens['pitch_error_um']:g} um error on one pitch changes a coefficient by up to "
           f"{max(sens['max_ldc_change_roller'], sens['max_ldc_change_nut']):.4f}")
-    if models.compare:
-        from prs_geom.analysis.loads import model_risk
-
-        _print_model_risk(model_risk(design, models.compare), models)
+    if risk is not None:
+        _print_model_risk(risk, models)
     return EXIT_OK
 
 
@@ -431,8 +439,9 @@ def _load_models(design: PRSDesign, contact=None, progress=silent):
     from prs_geom.pipeline import load_models
 
     models = load_models(design, contact, progress)
-    for msg in models.cache.warnings if models.cache is not None else ():
-        print(f"warning: {msg}", file=sys.stderr)
+    for cache in (models.cache, models.alternative_cache):
+        for msg in cache.warnings if cache is not None else ():
+            print(f"warning: {msg}", file=sys.stderr)
     return models
 
 
@@ -457,20 +466,28 @@ def _design_model(design: PRSDesign):
 
 
 def _print_model_risk(risk, models) -> None:
-    """The model-risk table of ``loads --compliance fe`` (worst and least coefficient per side
-    at the design load)."""
-    cache = models.cache
-    src = "read from the cache" if all(cache.hits.values()) else "computed and stored in the cache"
-    print(f"finite-element influence matrices {src} {cache.folder} ({cache.seconds:.1f} s)")
-    print("model risk at the design load (each set of pitch lists under each compliance model):")
-    print(f"  {'pitch lists':<36} {'model':<9} {'nut-roller min-max':>20} {'roller-screw min-max':>22}")
-    for c in risk.cases:
-        if c.load_fraction != 1.0:
-            continue
-        lists = c.pitch_lists + (f" ({c.designed_with})" if c.designed_with else "")
-        print(f"  {lists:<36} {c.evaluated_with:<9} {c.ldc_nut_roller.min():9.4f}-{c.ldc_nut_roller.max():.4f}"
-              f" {c.ldc_roller_screw.min():11.4f}-{c.ldc_roller_screw.max():.4f}")
+    """The model-risk table of ``loads --compliance fe``: the worst coefficient per side of
+    every set of pitch lists under every model at every load of the study."""
+    for cache, what in ((models.cache, "finite-element influence matrices"),
+                        (models.alternative_cache, "matrices of the sections cut at the engaged teeth")):
+        if cache is not None:
+            src = "read from the cache" if all(cache.hits.values()) else "computed and stored in the cache"
+            print(f"{what} {src} {cache.folder} ({cache.seconds:.1f} s)")
+    print("model risk: the worst coefficient, nut-roller / roller-screw, of each set of pitch lists under the "
+          "FE model (fe), each documented alternative and the analytic model:")
+    loads = "".join(f"{f'{fr * 100:.0f} % load':>16}" for fr in risk.load_fractions)
+    for lists, made in risk.list_sets():
+        print(f"  {lists}" + (f" designed with {made}" if made else "") + ":")
+        print(f"    {'model':<40}{loads}")
+        for name in risk.models:
+            cells = "".join(f"{'%.4f / %.4f' % risk.worst(lists, made, name, fr):>16}" for fr in risk.load_fractions)
+            print(f"    {name:<40}{cells}")
+    print("  models:")
+    for k, v in risk.descriptions.items():
+        print(f"    {k}: {v}")
     print(f"largest difference of a coefficient between the models: {risk.largest_model_difference:.4f}")
+    print("the FE matrices are ring loads: where the rollers carry unequal loads they are an approximation "
+          "(docs/theory/fe.md)")
 
 
 def _add_rating_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:

@@ -102,19 +102,38 @@ class Analysis:
 class LoadModels:
     """The load model a design asks for (``loads.compliance``) and what it was made from.
 
-    ``model`` is the one the analysis uses; with ``"fe"``, ``compare`` holds both models by
-    name (``"analytic"``, ``"fe"``) for the model-risk study and ``cache`` says where the
-    influence matrices came from (:mod:`prs_geom.analysis.fe.cache`)."""
+    ``model`` is the one the analysis uses; with ``"fe"``, ``compare`` holds by name the
+    analytic model, the FE model (``"fe"``) and its documented alternatives
+    (:data:`prs_geom.analysis.fe.compliance.ALTERNATIVES`) for the model-risk study,
+    ``designed_with`` the two whose equal-load lists it evaluates (analytic and FE),
+    ``descriptions`` a line per model, and ``cache`` says where the influence matrices came
+    from (:mod:`prs_geom.analysis.fe.cache`; ``alternative_cache`` for the sections that end
+    at the engaged teeth, a separate entry)."""
 
     model: LoadModel
     compare: dict[str, LoadModel] | None = None
     cache: "CachedInfluence | None" = None
+    alternative_cache: "CachedInfluence | None" = None
+    designed_with: tuple[str, ...] = ()
+    descriptions: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def risk_options(self) -> dict[str, Any]:
+        """The keyword arguments of the model-risk study
+        (:func:`prs_geom.analysis.loads.analyse_loads`)."""
+        return {"compare": self.compare, "designed_with": self.designed_with or None,
+                "descriptions": self.descriptions}
 
     @property
     def cache_report(self) -> dict[str, Any] | None:
         """Where the FE influence matrices came from, as report.json prints it inside
         ``loads.compliances.details.fe`` (None for the analytic model)."""
-        return None if self.cache is None else self.cache.report()
+        if self.cache is None:
+            return None
+        out = self.cache.report()
+        if self.alternative_cache is not None:
+            out["sections_cut_at_engaged_teeth"] = self.alternative_cache.report()
+        return out
 
 
 def load_models(design: PRSDesign, contact: ContactResult | None = None,
@@ -127,7 +146,7 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
     analytic = build_model(design, contact)
     if design.loads.compliance != "fe":
         return LoadModels(analytic)
-    from prs_geom.analysis.fe.compliance import fe_load_model
+    from prs_geom.analysis.fe.compliance import ALTERNATIVES, MAIN_VARIANT, fe_load_model
     from prs_geom.analysis.fe.cache import cached_influence
 
     # the teeth's compliance is that of the constant-pitch thread: a graded design's contact
@@ -135,7 +154,15 @@ def load_models(design: PRSDesign, contact: ContactResult | None = None,
     fe_contact = analyse_contact(design.constant_pitch()) if design.graded else contact
     cached = cached_influence(design.constant_pitch(), fe_contact, progress=progress)
     fe = fe_load_model(analytic, cached.influence)
-    return LoadModels(fe, {"analytic": analytic, "fe": fe}, cached)
+    short = cached_influence(design.constant_pitch(), fe_contact, progress=progress, extension=0,
+                             label="fe matrices, sections cut at the engaged teeth")
+    compare = {"analytic": analytic, "fe": fe}
+    descriptions = {"analytic": "Yamamoto's diagonal tooth terms and the 1D bars (docs/theory/loads.md)",
+                    "fe": MAIN_VARIANT.description}
+    for v in ALTERNATIVES:
+        compare[v.name] = fe_load_model(analytic, cached.influence if v.extended else short.influence, v)
+        descriptions[v.name] = v.description
+    return LoadModels(fe, compare, cached, short, ("analytic", "fe"), descriptions)
 
 
 def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
@@ -155,7 +182,7 @@ def analyse(design: PRSDesign, progress: ProgressFn = silent) -> Analysis:
     contact = analyse_contact(design)
     models = load_models(design, contact, progress)
     return Analysis(design, contact, analyse_loads(design, contact, progress=progress, model=models.model,
-                                                   compare=models.compare))
+                                                   **models.risk_options))
 
 
 def design_pitch(design: PRSDesign, target: str | dict[str, Any] = "equal", name: str | None = None) -> PRSDesign:
@@ -391,10 +418,11 @@ def stage_loads(ctx: BuildContext) -> None:
     d = ctx.design
     models = load_models(d, ctx.results.contact, ctx.progress)
     ctx.results.loads = loads = analyse_loads(d, ctx.results.contact, progress=ctx.progress, model=models.model,
-                                              compare=models.compare)
+                                              **models.risk_options)
     ctx.results.fe_cache = models.cache_report
-    if models.cache is not None:
-        ctx.results.warnings += fe_cache_warnings(models.cache)
+    for cache in (models.cache, models.alternative_cache):
+        if cache is not None:
+            ctx.results.warnings += fe_cache_warnings(cache)
     if loads.model_risk is not None:
         from prs_geom.exports.plots import plot_model_risk
 

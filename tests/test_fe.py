@@ -16,8 +16,8 @@ from scipy import special
 from scipy.spatial import cKDTree
 
 from prs_geom.analysis.contact import analyse_contact
-from prs_geom.analysis.fe import (CONVERGED_LEVEL, band_loads, calibrate_tooth_width, convergence_study,
-                                  influence_matrices, part_influence, part_sections, richardson)
+from prs_geom.analysis.fe import (CONVERGED_LEVEL, EXTENSION_TEETH, band_loads, calibrate_tooth_width,
+                                  convergence_study, influence_matrices, part_influence, part_sections, richardson)
 from prs_geom.analysis.fe.axisym import AxisymmetricModel
 from prs_geom.analysis.fe.halfplane import band_weight, hertz_semi_axes, local_term
 from prs_geom.analysis.fe.mesh import graded_line, grid_mesh, rectangle_mesh, thread_section_mesh
@@ -84,21 +84,33 @@ def test_model_rejects_bad_material():
 
 # --------------------------------------------------------------------------- meshes
 def test_thread_mesh_area_and_nesting(sections):
-    """The mesh covers the section exactly (area = body + teeth, straight nut flanks) and a
-    level's nodes are all nodes of the next level (uniform 2x refinement)."""
-    sec = sections["nut"].thread_section(3)
-    prof = sections["nut"].profile
+    """The mesh covers the section exactly (area = body with the nut's plain ends + teeth,
+    straight nut flanks) and a level's nodes are all nodes of the next level (uniform 2x
+    refinement)."""
+    nut = sections["nut"]
+    lo, hi = nut.end_lengths_mm
+    assert lo == hi == pytest.approx(15.75)          # ring gear 4 mm + end piece (default design)
+    sec = nut.thread_section(3)
+    prof = nut.profile
     m0, m1 = thread_section_mesh(sec, 0), thread_section_mesh(sec, 1)
     p, t = m0.points, m0.triangles
     a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
     area = 0.5 * np.sum((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
     tr, tc = prof.tooth_half_width(prof.root_radius), prof.tooth_half_width(prof.crest_radius)
     tooth = (tr + tc) * (prof.root_radius - prof.crest_radius)          # trapezoid 2 t mean x height
-    body = 3 * prof.pitch * (sec.far_radius - prof.root_radius)
+    body = (3 * prof.pitch + lo + hi) * (sec.far_radius - prof.root_radius)
     assert area == pytest.approx(body + 3 * tooth, rel=1e-12)
+    z = m0.points[1]
+    assert z.min() == pytest.approx(-lo, abs=1e-12) and z.max() == pytest.approx(3 * prof.pitch + hi, abs=1e-12)
     dist, _ = cKDTree(m1.points.T).query(m0.points.T)
     assert dist.max() < 1e-12
     assert m1.n_triangles == 4 * m0.n_triangles
+    # the screw runs on past the nut: EXTENSION_TEETH unloaded periods at each end
+    screw = sections["screw"]
+    assert screw.unloaded_teeth == (EXTENSION_TEETH, EXTENSION_TEETH)
+    ms = thread_section_mesh(screw.thread_section(3), 0)
+    assert ms.points[1].max() == pytest.approx((3 + 2 * EXTENSION_TEETH) * screw.profile.pitch, abs=1e-12)
+    assert f"flank_{3 + 2 * EXTENSION_TEETH}_upper" in ms.node_sets
 
 
 # --------------------------------------------------------------------------- band and local term
@@ -201,8 +213,8 @@ def test_richardson_recovers_a_known_order():
 def test_mesh_convergence_three_levels(design, contact, heavy_scale):
     """Levels 0, 1, 2: the two finest agree within 0.5 % on every diagonal entry, and the
     Richardson estimate of the finest level's error is below 0.2 %."""
-    teeth = 7 if heavy_scale == "full" else 3
-    study = convergence_study(design, (0, 1, 2), teeth=teeth, contact=contact)
+    teeth, extension = (7, EXTENSION_TEETH) if heavy_scale == "full" else (3, 1)
+    study = convergence_study(design, (0, 1, 2), teeth=teeth, contact=contact, extension=extension)
     for part in ("screw", "roller", "nut"):
         assert study.finest_change[part] < 5e-3, (part, study.finest_change[part])
         assert np.all(study.error_estimate[part] < 2e-3), part
@@ -266,11 +278,10 @@ def test_calibration_default_design_values(calibration, heavy_scale):
     assert rows["nut"].ratio_fe_to_yamamoto["pitch_circle_share"] < 0.35
     # the screw core's shear lag and the nut ring reach several pitches: only a long
     # section has teeth far enough from both ends to show a constant tooth compliance
-    # (the nut ring's tooth compliance drifts by some 10 % along the nut: the support face
-    # holds the ring's radial expansion near tooth 1)
+    # (the nut ring's drifts by about 1 % over its middle half: 1.1 % measured)
     limits = {"roller_nut_side": 0.02, "roller_screw_side": 0.02}
     if heavy_scale == "full":
-        limits.update(screw=0.02, nut=0.12)
+        limits.update(screw=0.02, nut=0.03)
     for name, limit in limits.items():
         assert calibration.tooth_spread[name] < limit, name
     if heavy_scale == "full":
@@ -278,7 +289,7 @@ def test_calibration_default_design_values(calibration, heavy_scale):
         assert rows["screw"].fe_tooth == pytest.approx(2.242e-6, rel=0.01)
         assert rows["roller_screw_side"].fe_tooth == pytest.approx(3.569e-7, rel=0.01)
         assert rows["roller_nut_side"].fe_tooth == pytest.approx(3.301e-7, rel=0.01)
-        assert rows["nut"].fe_tooth == pytest.approx(2.490e-6, rel=0.01)
+        assert rows["nut"].fe_tooth == pytest.approx(2.454e-6, rel=0.01)
 
 
 def test_compression_compression_screw_is_supported_at_the_far_end():
@@ -334,3 +345,101 @@ def test_fe_calibrated_width_supports_the_default_convention():
                  tooth_rs=r["screw"].fe_tooth_uniform + r["roller_screw_side"].fe_tooth_uniform)
     a, b = forward(d, model=m), forward(d, model=fe)
     assert abs(a.ldc_rs.max() - b.ldc_rs.max()) < 0.01 and abs(a.ldc_nr.max() - b.ldc_nr.max()) < 0.02
+
+
+# --------------------------------------------------------------------------- section ends (issue 34)
+@pytest.fixture(scope="module")
+def full_sections(design, contact, heavy_scale):
+    """The default design's 20-tooth sections at the converged level (PRS_HEAVY=full) or
+    at level 0 (CI's reduced size), extended as the model has them."""
+    level = CONVERGED_LEVEL if heavy_scale == "full" else 0
+    return level, influence_matrices(design, level=level, teeth=20, contact=contact)
+
+
+@pytest.mark.heavy
+def test_end_teeth_of_the_extended_sections(full_sections):
+    """Issue 34, done when: after the extension, the tooth part T_jj of the end teeth lies
+    within 3 % of the interior teeth (teeth 6-15): screw and both roller flanks at both ends
+    (measured 0.4 % at level 1; cut at the engaged teeth the screw's last tooth was 2.6 times
+    an interior one). The nut has its real ends (ring gears and end pieces, 15.75 mm each):
+    its tooth 1 is within 3 %; its last tooth is softer by 4.7 %, a property of the real
+    part, not of the section: the ring's free end is 15.75 mm away, about 1.5 decay lengths
+    of a cylinder's edge bending (1 / beta = 10.6 mm for this ring), and the difference
+    shrinks to 1.3 % when the ring is made 40 mm long there (test below)."""
+    _, infl = full_sections
+    n = 20
+    for part in infl:
+        D = np.diag(part.tooth_matrix())
+        for b, flank in enumerate(part.flanks):
+            block = D[b * n:(b + 1) * n]
+            interior = block[5:15].mean()
+            first, last = block[0] / interior - 1, block[-1] / interior - 1
+            if part.part == "nut":
+                assert abs(first) < 0.03, (flank, first)
+                assert 0.03 < last < 0.06, (flank, last)
+            else:
+                assert abs(first) < 0.03 and abs(last) < 0.03, (flank, first, last)
+
+
+@pytest.mark.heavy
+def test_nut_end_tooth_follows_the_real_ring(design, contact, full_sections):
+    """The nut's last tooth is softer because the real ring ends 15.75 mm beyond it: with the
+    ring 40 mm long there the difference drops below 2 %, while the body part of the last
+    tooth does not move (< 0.5 %): the difference is the ring's, not the decomposition's."""
+    from dataclasses import replace as _replace
+
+    level, infl = full_sections
+    sec = part_sections(design, contact)["nut"]
+    long_end = part_influence(_replace(sec, end_lengths_mm=(sec.end_lengths_mm[0], 40.0)), level, 20)
+    D = np.diag(long_end.tooth_matrix())
+    assert abs(D[-1] / D[5:15].mean() - 1) < 0.02
+    assert long_end.body[-1] == pytest.approx(infl.nut.body[-1], rel=5e-3)
+
+
+@pytest.mark.heavy
+def test_doubling_the_extension_moves_the_worst_coefficient_below_0_001(design, contact, full_sections):
+    """Issue 34, done when: doubling the screw's and the roller's unloaded periods (4 to 8)
+    changes the constant-pitch worst coefficient of either side by less than 0.001
+    (measured 0.0003 at levels 0 and 1)."""
+    from prs_geom.analysis.fe.compliance import fe_load_model
+    from prs_geom.analysis.loads import forward
+
+    level, infl = full_sections
+    doubled = influence_matrices(design, level=level, teeth=20, contact=contact, extension=2 * EXTENSION_TEETH)
+    assert doubled.screw.unloaded_teeth == (8, 8) and infl.screw.unloaded_teeth == (4, 4)
+    analytic = build_model(design, contact)
+    a = forward(design, model=fe_load_model(analytic, infl))
+    b = forward(design, model=fe_load_model(analytic, doubled))
+    assert abs(a.ldc_nr.max() - b.ldc_nr.max()) < 1e-3
+    assert abs(a.ldc_rs.max() - b.ldc_rs.max()) < 1e-3
+    # and cutting the sections at the engaged teeth is not converged (what issue 34 found)
+    cut = influence_matrices(design, level=level, teeth=20, contact=contact, extension=0)
+    c = forward(design, model=fe_load_model(analytic, cut))
+    assert abs(a.ldc_nr.max() - c.ldc_nr.max()) > 0.05
+
+
+def test_nut_ring_expands_as_a_lame_ring(sections):
+    """An independent check of the nut's radial spreading: every tooth loaded alike, the
+    ring's outside between teeth 10 and 11 moves out as a thick ring under the flank loads'
+    radial component spread as a pressure on the thread root radius (Lame, open ends:
+    u(R) = 2 p a^2 R / (E (R^2 - a^2))) plus the Poisson expansion of the ring's axial
+    compression there (nu N R / (E A), N the load of the ten teeth beyond): within 3 %
+    (measured 1.4 % low: the teeth, full rings in the section, add a little hoop stiffness)."""
+    sec = sections["nut"]
+    n = 20
+    mesh = thread_section_mesh(sec.thread_section(n), 0)
+    model = AxisymmetricModel(mesh, sec.youngs_modulus_mpa, sec.poisson_ratio, fixed=((sec.support_face, 1),))
+    flank = sec.flanks[0]
+    G, _ = band_loads(model, sec, flank, n)
+    u = model.nodal_displacement(model.solve(G.sum(axis=1)))
+    r, z = mesh.points
+    R, a, p = sec.far_radius_mm, sec.profile.root_radius, sec.profile.pitch
+    middle = np.isclose(r, R) & (np.abs(z - n * p / 2) <= p / 2)
+    g = sec.flank_geometry(flank)
+    radial_per_tooth = abs(g["d_r"] / g["d_z"])                  # N per N of axial ring load
+    E, nu = sec.youngs_modulus_mpa, sec.poisson_ratio
+    pressure = radial_per_tooth / (2 * math.pi * a * p)
+    hoop = 2 * pressure * a * a * R / (E * (R * R - a * a))
+    poisson = nu * (n / 2) * R / (E * math.pi * (R * R - a * a))
+    assert u[0][middle].mean() == pytest.approx(hoop + poisson, rel=0.03)
+    assert hoop > 2 * poisson                                     # the ring's hoop term dominates

@@ -96,6 +96,10 @@ class FeSummary:
     ``roller_screw``, ``flank_coupling``) and under a uniform load (``nut_roller``,
     ``roller_screw``), next to the diagonal Yamamoto terms they replace, all in mm/N;
     ``eigenvalues_mm_per_N``: the lowest and highest eigenvalue of the pair compliance.
+    ``variant``, ``bodies``, ``local_reference``: how the matrices became the compliance
+    (:class:`prs_geom.analysis.fe.compliance.FeVariant`); ``extension_teeth``: the screw's
+    and roller's unloaded thread periods before and after the engaged teeth;
+    ``nut_end_lengths_mm``: the nut section's ends beyond its thread.
     """
 
     mesh_level: int
@@ -106,6 +110,11 @@ class FeSummary:
     pair_compliance_uniform_mm_per_N: Mapping[str, float]
     yamamoto_mm_per_N: Mapping[str, float]
     eigenvalues_mm_per_N: tuple[float, float]
+    variant: str = "fe"
+    bodies: str = "fe"
+    local_reference: float = 0.5
+    extension_teeth: tuple[int, int] = (0, 0)
+    nut_end_lengths_mm: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass(frozen=True)

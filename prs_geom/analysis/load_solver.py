@@ -128,9 +128,12 @@ class LoadModel:
     ``compliance`` (optional): dense linear compliance of the 2n contact pairs, mm/N, rows and
     columns ordered [nut-roller teeth 1..n, roller-screw teeth 1..n] of one roller
     (deflection of pair i per unit load at pair j, teeth of both mating parts). It must be
-    symmetric positive semi-definite (an elastic influence matrix is). It replaces the
-    diagonal ``tooth_nr`` / ``tooth_rs`` terms; the Hertz terms stay. See
-    :func:`block_compliance` to build it from two per-side (n, n) matrices.
+    symmetric, and positive semi-definite together with the bodies
+    (``compliance + support_body_operator()``: the elastic influence matrix of the mating
+    parts is); a correction to the bodies may make ``compliance`` alone indefinite
+    (:mod:`prs_geom.analysis.fe.compliance`). It replaces the diagonal ``tooth_nr`` /
+    ``tooth_rs`` terms; the Hertz terms stay. See :func:`block_compliance` to build it from
+    two per-side (n, n) matrices.
     """
 
     n: int
@@ -161,8 +164,9 @@ class LoadModel:
         if np.abs(C - C.T).max() > 1e-10 * scale:
             raise DesignError("compliance", "array", "must be symmetric (Maxwell-Betti reciprocity)")
         C = 0.5 * (C + C.T)
-        if float(np.linalg.eigvalsh(C).min()) < -1e-10 * scale:
-            raise DesignError("compliance", "array", "must be positive semi-definite")
+        total = C + self.support_body_operator()
+        if float(np.linalg.eigvalsh(total).min()) < -1e-10 * float(np.abs(total).max()):
+            raise DesignError("compliance", "array", "must be positive semi-definite with the bodies")
         C.setflags(write=False)
         object.__setattr__(self, "compliance", C)
 
@@ -205,6 +209,20 @@ class LoadModel:
             K[r, 0, :, r, 1, :] -= self.body_roller * M
             K[r, 1, :, r, 0, :] -= self.body_roller * M
         return K.reshape(2 * R * self.n, 2 * R * self.n)
+
+    def support_body_operator(self) -> NDArray:
+        """The body operator (one roller for all z, (2n, 2n), mm/N) written from each part's
+        support: :meth:`body_operator`, except the compression-compression screw, whose
+        kernel n - 1 - max(i, j) counts from the far end. It equals the solver's symmetric
+        kernel with the known shift in the gaps up to a term that is the same on every tooth
+        of a side (absorbed by that side's approach), and it is what a finite-element body
+        matrix, measured from the support, compares with."""
+        K = self.body_operator()
+        if self.sign_screw < 0:
+            n = self.n
+            i = np.arange(n, dtype=np.float64)
+            K[n:, n:] += self.z * self.body_screw * ((n - 1) - np.maximum.outer(i, i) - np.minimum.outer(i, i))
+        return K
 
     def linear_compliance(self) -> NDArray:
         """The (2n, 2n) linear compliance of the contact pairs: ``compliance`` or the diagonal

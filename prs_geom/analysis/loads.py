@@ -64,8 +64,8 @@ it terminates).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -656,12 +656,29 @@ class ModelRiskCase:
 class ModelRisk:
     """How much the load sharing depends on the compliance model: every set of pitch lists
     (constant pitch, the design's own lists when graded, the equal-load lists designed with
-    each model) evaluated with every model at every load fraction (:func:`model_risk`)."""
+    the models of ``designed_with``) evaluated with every model at every load fraction
+    (:func:`model_risk`). ``descriptions``: one line per model name (may be empty)."""
 
     models: tuple[str, ...]
     design_load_n: float
     load_fractions: tuple[float, ...]
     cases: tuple[ModelRiskCase, ...]
+    designed_with: tuple[str, ...] = ()
+    descriptions: Mapping[str, str] = field(default_factory=dict)
+
+    def worst(self, pitch_lists: str, designed_with: str | None, evaluated_with: str,
+              load_fraction: float = 1.0) -> tuple[float, float]:
+        """(worst nut-roller, worst roller-screw) coefficient of one case."""
+        c = self.case(pitch_lists, designed_with, evaluated_with, load_fraction)
+        return float(c.ldc_nut_roller.max()), float(c.ldc_roller_screw.max())
+
+    def list_sets(self) -> list[tuple[str, str | None]]:
+        """The sets of pitch lists, (pitch_lists, designed_with), in study order."""
+        out: list[tuple[str, str | None]] = []
+        for c in self.cases:
+            if (c.pitch_lists, c.designed_with) not in out:
+                out.append((c.pitch_lists, c.designed_with))
+        return out
 
     def case(self, pitch_lists: str, designed_with: str | None, evaluated_with: str,
              load_fraction: float = 1.0) -> ModelRiskCase:
@@ -686,12 +703,18 @@ class ModelRisk:
         return worst
 
 def model_risk(design: PRSDesign, models: dict[str, LoadModel],
-               fractions: Sequence[float] = MODEL_RISK_FRACTIONS) -> ModelRisk:
+               fractions: Sequence[float] = MODEL_RISK_FRACTIONS, designed_with: Sequence[str] | None = None,
+               descriptions: Mapping[str, str] | None = None) -> ModelRisk:
     """Every set of pitch lists under every model (by name) at every load fraction.
 
-    The lists: constant pitch, the design's own lists when it is graded, and for each model
-    the equal-load lists designed with it (:func:`design_pitches`). One batched solve per
-    set of lists and model."""
+    The lists: constant pitch, the design's own lists when it is graded, and the equal-load
+    lists designed with each model named in ``designed_with`` (default: every model;
+    :func:`design_pitches`). One batched solve per set of lists and model. ``descriptions``:
+    a line per model for the reports."""
+    designers = tuple(models) if designed_with is None else tuple(designed_with)
+    unknown = [m for m in designers if m not in models]
+    if unknown:
+        raise ValueError(f"designed_with names models not given: {unknown}")
     F0 = design.loading.axial_load_n
     p = design.thread.pitch_mm
     k = design.thread.engaged_teeth - 1
@@ -699,8 +722,8 @@ def model_risk(design: PRSDesign, models: dict[str, LoadModel],
         ("constant pitch", None, [p] * k, [p] * k)]
     if design.graded:
         lists.append(("design pitch lists", None, design.pitch_list("roller"), design.pitch_list("nut")))
-    for name, m in models.items():
-        pd = design_pitches(design, model=m)
+    for name in designers:
+        pd = design_pitches(design, model=models[name])
         lists.append(("equal load", name, pd.roller_mm, pd.nut_mm))
     fr = np.array([float(f) for f in fractions])
     cases = []
@@ -712,7 +735,8 @@ def model_risk(design: PRSDesign, models: dict[str, LoadModel],
                 r = b[i]
                 cases.append(ModelRiskCase(label, made, name, float(fr[i]), float(fr[i] * F0), r.ldc_nr, r.ldc_rs,
                                            int((~r.active_nr).sum() + (~r.active_rs).sum())))
-    return ModelRisk(tuple(models), F0, tuple(float(f) for f in fr), tuple(cases))
+    return ModelRisk(tuple(models), F0, tuple(float(f) for f in fr), tuple(cases), designers,
+                     dict(descriptions or {}))
 
 
 @dataclass(frozen=True)
@@ -759,13 +783,15 @@ class LoadsResult:
 
 def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
                   progress: ProgressFn | None = None, model: LoadModel | None = None,
-                  compare: dict[str, LoadModel] | None = None) -> LoadsResult:
+                  compare: dict[str, LoadModel] | None = None, designed_with: Sequence[str] | None = None,
+                  descriptions: Mapping[str, str] | None = None) -> LoadsResult:
     """The loads stage: load distribution, equal-load design and the curves
     of the designed state (see :class:`LoadsResult`).
 
     ``model``: the load model to use (default the analytic :func:`build_model`; the FE one
     comes from :func:`prs_geom.analysis.fe.compliance.fe_load_model`). ``compare``: models by
-    name for the model-risk study (:func:`model_risk`), or None for none."""
+    name for the model-risk study (:func:`model_risk`, with ``designed_with`` and
+    ``descriptions``), or None for none."""
     model = build_model(design, contact) if model is None else model
     distribution = load_distribution(design, model, progress)
     equal = design_pitches(design, model=model)
@@ -780,7 +806,7 @@ def analyse_loads(design: PRSDesign, contact: ContactResult | None = None,
         shown = {"ldc_nut_roller": r.ldc_nr.tolist(), "ldc_roller_screw": r.ldc_rs.tolist()}
         off, label = off_design(eq, model=model), "equal-load pitch design"
         pr, pn = equal.roller_mm, equal.nut_mm
-    risk = model_risk(design, compare) if compare else None
+    risk = model_risk(design, compare, designed_with=designed_with, descriptions=descriptions) if compare else None
     return LoadsResult(model=model, distribution=distribution, equal_load=equal, designed_ldc=shown,
                        designed_off_design=off, designed_label=label, designed_roller_mm=pr, designed_nut_mm=pn,
                        model_risk=risk)

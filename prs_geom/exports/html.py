@@ -474,8 +474,10 @@ def _compliance_text(model: LoadModel, fe_cache: dict[str, Any] | None) -> str:
             else "computed"
         return (f"Tooth compliance: axisymmetric finite-element influence matrices (mesh level "
                 f"{format_cell(fe.mesh_level)}, {format_cell(fe.teeth)} teeth, {format_cell(fe.n_dofs)} "
-                f"degrees of freedom, {src}), coupled between teeth and between a roller's flanks; Hertz contact "
-                f"and 1D bodies as in the analytic model.")
+                f"degrees of freedom, {src}; the screw and the roller run {format_cell(fe.extension_teeth[0])} "
+                f"unloaded thread periods past the nut at each end, the nut has its real ends), coupled between "
+                f"teeth and between a roller's flanks, with the FE bodies; Hertz contact as in the analytic "
+                f"model.")
     return (f"Tooth compliance: Yamamoto's terms, diagonal, width convention "
             f"'{details.tooth_width if details is not None else ''}'.")
 
@@ -485,30 +487,34 @@ def _range(lo: Any, hi: Any, key: str) -> Raw:
 
 
 def _model_risk_html(loads: LoadsResult, svgs: dict[str, str], fe_cache: dict[str, Any] | None) -> str:
-    """The model-risk part of the loads section: every set of pitch lists under every
-    compliance model (table at the design load, worst over the loads, plots)."""
+    """The model-risk part of the loads section: every set of pitch lists under the analytic
+    model, the FE model and each documented alternative of it (worst coefficient per side at
+    every load, the models described, plots)."""
     out = [f"<p class='note'>{prose(_compliance_text(loads.model, fe_cache))}</p>",
-           "<h3 id='model-risk'>Model risk: analytic against finite-element compliance</h3>"]
+           "<h3 id='model-risk'>Model risk: the finite-element model, its alternatives and the analytic model</h3>"]
     risk = loads.model_risk
     if risk is None:
         return "".join(out) + f"<p class='note'>{prose(MODEL_RISK_NOT_COMPUTED['note'])}.</p>"
-    out.append("<p class='note'>Each set of pitch lists evaluated with each compliance model. A list designed "
-               "for equal load with one model shares equally only under that model; the spread between the rows "
-               f"is how much the answer depends on the model (largest difference of a coefficient "
-               f"{num(risk.largest_model_difference, 'largest_model_difference')}).</p>")
-    rows = []
-    for c in risk.cases:
-        if c.load_fraction != 1.0:
-            continue
-        others = [o for o in risk.cases if (o.pitch_lists, o.designed_with, o.evaluated_with)
-                  == (c.pitch_lists, c.designed_with, c.evaluated_with)]
-        worst = max(max(float(o.ldc_nut_roller.max()), float(o.ldc_roller_screw.max())) for o in others)
-        rows.append([c.pitch_lists + (f" (designed with {c.designed_with})" if c.designed_with else ""),
-                     c.evaluated_with, _range(c.ldc_nut_roller.min(), c.ldc_nut_roller.max(), "ldc"),
-                     _range(c.ldc_roller_screw.min(), c.ldc_roller_screw.max(), "ldc"), Q(worst, "max_ldc")])
-    out.append(table(rows, ["pitch lists", "evaluated with", "nut-roller LDC at design load",
-                            "roller-screw LDC at design load",
-                            "worst LDC over " + ", ".join(format_quantity(f * 100, "%") for f in risk.load_fractions)]))
+    out.append("<p class='note'>Each set of pitch lists evaluated with each compliance model: the worst "
+               "load-distribution coefficient, nut-roller / roller-screw, at each load. A list designed for equal "
+               "load with one model shares equally only under that model; the spread down a column is how much the "
+               "answer depends on the modelling choices (largest difference of a coefficient "
+               f"{num(risk.largest_model_difference, 'largest_model_difference')}). The FE matrices are ring "
+               "loads: where the rollers carry unequal loads they are an approximation.</p>")
+    fractions = risk.load_fractions
+    for lists, made in risk.list_sets():
+        rows = []
+        for name in risk.models:
+            cells: list[Any] = [name]
+            for fr in fractions:
+                nr, rs = risk.worst(lists, made, name, fr)
+                cells.append(Raw(f"{num(nr, 'max_ldc', with_unit=False)} / {num(rs, 'max_ldc', with_unit=False)}"))
+            rows.append(cells)
+        out.append(f"<h4>{prose(lists + (f' designed with {made}' if made else ''))}</h4>")
+        out.append(table(rows, ["model"] + [f"worst LDC at {format_quantity(f * 100, '%')} load" for f in fractions]))
+    items = "".join(f"<li><b>{prose(k)}</b>: {prose(v)}</li>" for k, v in risk.descriptions.items())
+    if items:
+        out.append(f"<ul class='note'>{items}</ul>")
     shown = [svgs[f] for f in ("model_risk_ldc", "model_risk_loads") if f in svgs]
     if shown:
         out.append("<div class='plots'>" + "".join(svg_element(t) for t in shown) + "</div>")

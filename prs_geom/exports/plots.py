@@ -191,22 +191,28 @@ def plot_loads(out: Path, name: str, const: dict[str, Any], designed: dict[str, 
 def plot_model_risk(out: Path, name: str, risk: "ModelRisk", svgs: dict[str, str] | None = None) -> list[str]:
     """Two figures of the model-risk study (:class:`~prs_geom.analysis.loads.ModelRisk`):
     ``model_risk_ldc``, the coefficients per tooth of every set of pitch lists under every
-    compliance model at the design load (colour: the lists; line: the model), and
-    ``model_risk_loads``, the worst coefficient per side over the load fractions."""
+    analytic and the FE model at the design load (colour: the lists; line: the model), and
+    ``model_risk_loads``, the worst coefficient per side over the load fractions under every
+    model and alternative (one column per set of lists)."""
     files = []
     groups: list[tuple[str, str | None]] = []
     for c in risk.cases:
         if (c.pitch_lists, c.designed_with) not in groups:
             groups.append((c.pitch_lists, c.designed_with))
-    styles = {m: ls for m, ls in zip(risk.models, ("-", "--", ":", "-."))}
-    markers = {m: mk for m, mk in zip(risk.models, ("o", "s", "^", "v"))}
+    line_styles = ("--", "-", ":", "-.", (0, (5, 1)), (0, (3, 1, 1, 1, 1, 1)), (0, (1, 3)))
+    marker_styles = ("o", "s", "^", "v", "D", "x", "+")
+    styles = {m: line_styles[i % len(line_styles)] for i, m in enumerate(risk.models)}
+    markers = {m: marker_styles[i % len(marker_styles)] for i, m in enumerate(risk.models)}
+    # per tooth: the analytic and the FE model (the alternatives' worst values are in the
+    # second figure and the tables)
+    per_tooth_models = [m for m in risk.models if m in ("analytic", "fe")] or list(risk.models[:2])
 
     def label(lists: str, made: str | None, model: str) -> str:
         return f"{lists}{f' ({made})' if made else ''} under {model}"
 
     def per_tooth(ax, key):
         for gi, (lists, made) in enumerate(groups):
-            for model in risk.models:
+            for model in per_tooth_models:
                 c = risk.case(lists, made, model, 1.0)
                 v = getattr(c, key)
                 ax.plot(np.arange(1, v.size + 1), v, linestyle=styles[model], marker=markers[model], ms=3,
@@ -217,21 +223,25 @@ def plot_model_risk(out: Path, name: str, risk: "ModelRisk", svgs: dict[str, str
     fig.axes[0].legend(fontsize=7)
     files += save_figure(fig, out, "model_risk_ldc", svgs)
 
-    fig, axes = _figure(1, 2, figsize=(10, 4), sharey=True)
     fr = np.array(risk.load_fractions) * 100.0
-    for ax, key, side in ((axes[0], "ldc_nut_roller", "nut-roller"), (axes[1], "ldc_roller_screw", "roller-screw")):
-        for gi, (lists, made) in enumerate(groups):
-            for model in risk.models:
+    fig, axes = _figure(2, len(groups), figsize=(4.2 * len(groups), 7), sharey="row", squeeze=False)
+    for gi, (lists, made) in enumerate(groups):
+        for row, (key, side) in enumerate((("ldc_nut_roller", "nut-roller"), ("ldc_roller_screw", "roller-screw"))):
+            ax = axes[row][gi]
+            for mi, model in enumerate(risk.models):
                 worst = [float(getattr(risk.case(lists, made, model, f), key).max()) for f in risk.load_fractions]
-                ax.plot(fr, worst, linestyle=styles[model], marker=markers[model], color=f"C{gi}",
-                        label=label(lists, made, model))
-        ax.axhline(1.0, color="0.6", lw=0.8)
-        ax.set_title(f"{side}: worst coefficient")
-        ax.set_xlabel("load (% of the design load)")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("worst load-distribution coefficient")
-    axes[0].legend(fontsize=7)
-    fig.suptitle(f"{name}: model risk over the load")
+                ax.plot(fr, worst, linestyle=styles[model], marker=markers[model], color=f"C{mi}", label=model)
+            ax.axhline(1.0, color="0.6", lw=0.8)
+            ax.set_title(f"{lists}{f' ({made})' if made else ''}: {side}", fontsize=9)
+            ax.grid(alpha=0.3)
+            if row == 1:
+                ax.set_xlabel("load (% of the design load)")
+        axes[0][0].set_ylabel("worst coefficient, nut-roller")
+        axes[1][0].set_ylabel("worst coefficient, roller-screw")
+    # the bottom right panel's upper right corner is free: the coefficients there fall toward
+    # the design load and rise less above it
+    axes[1][-1].legend(fontsize=7, loc="upper right")
+    fig.suptitle(f"{name}: model risk over the load (each model and alternative)")
     files += save_figure(fig, out, "model_risk_loads", svgs)
     return files
 

@@ -504,7 +504,9 @@ def _fe_summary(fe: FeSummary, cache: Mapping[str, Any] | None) -> dict[str, Any
            "pair_compliance_middle_tooth_mm_per_N": dict(fe.pair_compliance_middle_tooth_mm_per_N),
            "pair_compliance_uniform_mm_per_N": dict(fe.pair_compliance_uniform_mm_per_N),
            "yamamoto_mm_per_N": dict(fe.yamamoto_mm_per_N),
-           "eigenvalues_mm_per_N": list(fe.eigenvalues_mm_per_N)}
+           "eigenvalues_mm_per_N": list(fe.eigenvalues_mm_per_N), "variant": fe.variant, "bodies": fe.bodies,
+           "local_term_reference_of_b": fe.local_reference, "unloaded_teeth_screw_roller": list(fe.extension_teeth),
+           "nut_end_lengths_mm": list(fe.nut_end_lengths_mm)}
     if cache is not None:
         out["cache"] = dict(cache)
     return out
@@ -535,7 +537,8 @@ def constant_pitch_section(dist: LoadDistribution) -> dict[str, Any]:
     worst of them."""
     rc = dist.constant_pitch
     return {"ldc_nut_roller": rc.ldc_nr.tolist(), "ldc_roller_screw": rc.ldc_rs.tolist(),
-            "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max()))}
+            "max_ldc": float(max(rc.ldc_nr.max(), rc.ldc_rs.max())),
+            "max_ldc_nut_roller": float(rc.ldc_nr.max()), "max_ldc_roller_screw": float(rc.ldc_rs.max())}
 
 
 def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None) -> dict[str, Any]:
@@ -549,6 +552,8 @@ def loads_section(dist: LoadDistribution, cache: Mapping[str, Any] | None = None
         "ldc_nut_roller": r.ldc_nr.tolist(),
         "ldc_roller_screw": r.ldc_rs.tolist(),
         "max_ldc": dist.max_ldc,
+        "max_ldc_nut_roller": float(r.ldc_nr.max()),
+        "max_ldc_roller_screw": float(r.ldc_rs.max()),
         "tooth_loads_N": {"nut_roller": r.f_nr.tolist(), "roller_screw": r.f_rs.tolist()},
         "teeth_out_of_contact": int((~r.active_nr).sum() + (~r.active_rs).sum()),
         "axial_stiffness_N_per_um": dist.stiffness["secant_N_per_um"],
@@ -591,7 +596,9 @@ def model_risk_section(risk: ModelRisk | None) -> dict[str, Any]:
     :data:`MODEL_RISK_NOT_COMPUTED` (a copy) when ``risk`` is None."""
     if risk is None:
         return dict(MODEL_RISK_NOT_COMPUTED)
-    return {"computed": True, "models": list(risk.models), "design_load_N": risk.design_load_n,
+    return {"computed": True, "models": list(risk.models), "main_model": "fe",
+            "designed_with": list(risk.designed_with), "descriptions": dict(risk.descriptions),
+            "design_load_N": risk.design_load_n,
             "load_fractions": list(risk.load_fractions),
             "largest_model_difference": risk.largest_model_difference,
             "cases": [_model_risk_case(c) for c in risk.cases]}

@@ -1,6 +1,7 @@
 """Finite-element model of the thread teeth (axisymmetric, linear elastic, scikit-fem).
 
-Owns the structured graded meshes of a part's engaged section
+Owns the structured graded meshes of a part's section (the engaged teeth with the unloaded
+thread or the plain ends beyond them)
 (:mod:`~prs_geom.analysis.fe.mesh`), the axisymmetric elasticity form and solver
 (:mod:`~prs_geom.analysis.fe.axisym`), the Hertz band and its half-plane local term
 (:mod:`~prs_geom.analysis.fe.halfplane`) and, from a design, the teeth's influence
@@ -21,12 +22,13 @@ if importlib.util.find_spec("skfem") is None:  # pragma: no cover - tests/test_f
 
     raise EnvironmentFailure('the finite-element model needs scikit-fem: pip install "prs-geom[fe]"')
 
-from prs_geom.analysis.fe.teeth import (CONVERGED_LEVEL, DEFAULT_TEETH, ConvergenceStudy, InfluenceMatrices,
-                                        LoadedFlank, PartInfluence, PartSection, ToothCalibration, WidthCalibration,
-                                        band_loads, calibrate_tooth_width, convergence_study, influence_matrices,
-                                        part_influence, part_sections, richardson)
+from prs_geom.analysis.fe.teeth import (CONVERGED_LEVEL, DEFAULT_TEETH, EXTENSION_TEETH, LOCAL_REFERENCES,
+                                        ConvergenceStudy, InfluenceMatrices, LoadedFlank, PartInfluence, PartSection,
+                                        ToothCalibration, WidthCalibration, band_loads, calibrate_tooth_width,
+                                        convergence_study, influence_matrices, nut_end_lengths, part_influence,
+                                        part_sections, richardson)
 
-__all__ = ["CONVERGED_LEVEL", "DEFAULT_TEETH", "ConvergenceStudy", "InfluenceMatrices", "LoadedFlank",
-           "PartInfluence", "PartSection", "ToothCalibration", "WidthCalibration", "band_loads",
-           "calibrate_tooth_width", "convergence_study", "influence_matrices", "part_influence", "part_sections",
-           "richardson"]
+__all__ = ["CONVERGED_LEVEL", "DEFAULT_TEETH", "EXTENSION_TEETH", "LOCAL_REFERENCES", "ConvergenceStudy",
+           "InfluenceMatrices", "LoadedFlank", "PartInfluence", "PartSection", "ToothCalibration",
+           "WidthCalibration", "band_loads", "calibrate_tooth_width", "convergence_study", "influence_matrices",
+           "nut_end_lengths", "part_influence", "part_sections", "richardson"]

@@ -46,8 +46,9 @@ STAGE = "fe"
 #: Modules of prs_geom.analysis.fe that use the matrices without computing them: their source
 #: does not enter the key.
 _NOT_COMPUTING = ("cache.py", "compliance.py")
-_ARRAYS = ("matrix", "axial_position_mm", "axial_sign", "body", "local", "contacts_per_ring", "band_half_width_mm")
-_SCALARS = ("level", "teeth", "n_dofs", "body_per_pitch", "body_per_pitch_1d", "pitch_mm", "seconds")
+_ARRAYS = ("matrix", "axial_position_mm", "axial_sign", "body", "local", "contacts_per_ring", "band_half_width_mm",
+           "local_by_reference", "unloaded_teeth", "end_lengths_mm")
+_SCALARS = ("level", "teeth", "n_dofs", "body_per_pitch", "body_per_pitch_1d", "pitch_mm", "support_z_mm", "seconds")
 _PARTS = ("screw", "roller", "nut")
 
 
@@ -107,6 +108,8 @@ def influence_from_arrays(arrays: dict[str, np.ndarray]) -> Any:
     from prs_geom.analysis.fe.teeth import PartInfluence
 
     fields: dict[str, Any] = {k: arrays[k] for k in _ARRAYS}
+    fields["unloaded_teeth"] = tuple(int(e) for e in arrays["unloaded_teeth"])
+    fields["end_lengths_mm"] = tuple(float(e) for e in arrays["end_lengths_mm"])
     fields.update({k: arrays[k].item() for k in _SCALARS})
     return PartInfluence(part=str(arrays["part"]), flanks=tuple(str(f) for f in arrays["flanks"]),
                          support_face=str(arrays["support_face"]), **fields)
@@ -161,23 +164,26 @@ class CachedInfluence:
 
 
 def cached_influence(design: Any, contact: Any = None, level: int | None = None, teeth: int | None = None,
-                     progress: ProgressFn = silent, folder: Path | None = None) -> CachedInfluence:
-    """The influence matrices of ``design`` (engaged teeth, converged level by default),
-    read from the cache (``folder``, default :func:`cache_dir`) where present, else computed
-    part by part and stored.
+                     progress: ProgressFn = silent, folder: Path | None = None,
+                     extension: int | None = None, label: str = "fe matrices") -> CachedInfluence:
+    """The influence matrices of ``design`` (engaged teeth, converged level, sections
+    extended by ``EXTENSION_TEETH`` by default; ``extension=0``: the sections that end at the
+    engaged teeth, a separate entry), read from the cache (``folder``, default
+    :func:`cache_dir`) where present, else computed part by part and stored.
 
-    ``progress("fe matrices", parts done, 3)`` after each part."""
+    ``progress(label, parts done, 3)`` after each part."""
     require_fe()
-    from prs_geom.analysis.fe.teeth import CONVERGED_LEVEL, InfluenceMatrices, part_influence, part_sections
+    from prs_geom.analysis.fe.teeth import (CONVERGED_LEVEL, EXTENSION_TEETH, InfluenceMatrices, part_influence,
+                                            part_sections)
 
     started = time.perf_counter()
     level = CONVERGED_LEVEL if level is None else int(level)
     teeth = design.thread.engaged_teeth if teeth is None else int(teeth)
     store = ArrayStore(cache_dir() if folder is None else Path(folder))
-    sections = part_sections(design, contact)
+    sections = part_sections(design, contact, EXTENSION_TEETH if extension is None else int(extension))
     fingerprint = code_fingerprint()
     parts, hits, keys, stored, warnings = {}, {}, {}, True, []
-    progress("fe matrices", 0, len(_PARTS))
+    progress(label, 0, len(_PARTS))
     for done, name in enumerate(_PARTS, start=1):
         description = _description(sections[name], level, teeth)
         key = keys[name] = part_key(sections[name], level, teeth, fingerprint)
@@ -190,7 +196,7 @@ def cached_influence(design: Any, contact: Any = None, level: int | None = None,
             pi = part_influence(sections[name], level, teeth)
             stored = store.write(name, key, description, influence_arrays(pi)) and stored
         parts[name] = pi
-        progress("fe matrices", done, len(_PARTS))
+        progress(label, done, len(_PARTS))
     return CachedInfluence(influence=InfluenceMatrices(**parts), hits=hits,
                            keys=keys, folder=store.folder, stored=stored, seconds=time.perf_counter() - started,
                            warnings=tuple(warnings))

@@ -6,7 +6,8 @@ from tensor-product grids (no Python loop over nodes or elements).
 Frame: the meridian half-plane of a part, r radial (mm, >= 0), z axial (mm). A threaded
 section holds ``teeth`` whole thread periods, z in [0, teeth * pitch]; tooth j (1-based)
 has its mid-plane at z = (j - 1/2) p, so tooth 1 is next to the face z = 0 (the loaded end)
-and z grows toward the free end. The end faces cut through groove centres.
+and z grows toward the free end. The end faces cut through groove centres, or end a plain
+body piece beyond the thread (``ThreadSection.end_lengths``: a nut's ends).
 
 Blocks of a threaded section
 ----------------------------
@@ -33,6 +34,7 @@ re-entrant root corners (stress singularities) and a two-sided map toward band e
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -215,6 +217,10 @@ class ThreadSection:
         Level-0 target interval length (mm) along the tooth height between break points.
     band_intervals : int
         Level-0 intervals per band half.
+    end_lengths : (float, float)
+        Plain body (no teeth) beyond the threaded periods, before z = 0 and after
+        z = teeth p (mm): a nut's ends beyond its thread. The section then spans
+        [-end_lengths[0], teeth p + end_lengths[1]] and its end faces are those of the body.
     """
 
     pitch: float
@@ -229,6 +235,7 @@ class ThreadSection:
     body_intervals: int = 8
     radial_size: float = 0.15
     band_intervals: int = 2
+    end_lengths: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         if not (self.pitch > 0 and self.teeth >= 1):
@@ -250,6 +257,8 @@ class ThreadSection:
         for name in ("eta_intervals", "groove_intervals", "body_intervals", "band_intervals"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name} must be >= 1")
+        if len(self.end_lengths) != 2 or not all(e >= 0.0 for e in self.end_lengths):
+            raise ValueError("end_lengths are two lengths >= 0 (mm)")
 
     @property
     def external(self) -> bool:
@@ -301,6 +310,7 @@ def thread_section_mesh(sec: ThreadSection, level: int = 0) -> TriangleMesh:
     base_start = len(left) - 1                   # index of eta = -1 within a period
     mids = (np.arange(k) + 0.5) * p
     z_axial = np.concatenate([(mids[:, None] + period[None, :-1]).ravel(), [k * p]])
+    z_axial, first = _with_ends(z_axial, sec, level)
 
     # body grid: radial index 0 at the thread root, clustered there
     body_r = segment_nodes(r_root, sec.far_radius, sec.body_intervals * 2 ** level, "start")
@@ -318,7 +328,7 @@ def thread_section_mesh(sec: ThreadSection, level: int = 0) -> TriangleMesh:
     n_tooth_new = Zt.size
     tooth_idx = np.empty((k, ns + 1, ne + 1), dtype=np.int64)
     tooth_idx[:, 1:, :] = n_body + np.arange(n_tooth_new).reshape(k, ns, ne + 1)
-    base_cols = (np.arange(k) * n_per + base_start)[:, None] + np.arange(ne + 1)[None, :]
+    base_cols = first + (np.arange(k) * n_per + base_start)[:, None] + np.arange(ne + 1)[None, :]
     tooth_idx[:, 0, :] = body_idx[0][base_cols]
 
     points = np.concatenate([np.stack([Rb.ravel(), Zb.ravel()]),
@@ -334,6 +344,26 @@ def thread_section_mesh(sec: ThreadSection, level: int = 0) -> TriangleMesh:
         sets[f"flank_{j + 1}_upper"] = tooth_idx[j, :, -1]
         sets[f"flank_{j + 1}_lower"] = tooth_idx[j, :, 0]
     return TriangleMesh(points, t, sets)
+
+
+def _with_ends(z_axial: NDArray, sec: ThreadSection, level: int) -> tuple[NDArray, int]:
+    """The axial nodes with the plain end pieces (``sec.end_lengths``) added, and the index
+    of z = 0 in them. An end piece's intervals grow from the groove's size next to the thread
+    (clustered toward it) to about half a pitch."""
+    lo, hi = (float(e) for e in sec.end_lengths)
+    parts, first = [z_axial], 0
+    for length, side in ((lo, -1), (hi, 1)):
+        if length <= 0.0:
+            continue
+        n = max(2, math.ceil(2.0 * length / sec.pitch)) * 2 ** level
+        if side < 0:
+            nodes = segment_nodes(-length, 0.0, n, "end")[:-1]
+            parts.insert(0, nodes)
+            first = nodes.size
+        else:
+            end = sec.teeth * sec.pitch
+            parts.append(segment_nodes(end, end + length, n, "start")[1:])
+    return np.concatenate(parts), first
 
 
 def _grid_triangles_stack(index: NDArray) -> NDArray:

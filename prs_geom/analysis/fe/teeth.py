@@ -84,13 +84,22 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["LoadedFlank", "PartSection", "PartInfluence", "InfluenceMatrices", "ConvergenceStudy",
            "ToothCalibration", "WidthCalibration", "part_sections", "band_loads", "part_influence",
            "influence_matrices", "richardson", "convergence_study", "calibrate_tooth_width", "DEFAULT_TEETH",
-           "CONVERGED_LEVEL"]
+           "CONVERGED_LEVEL", "EXTENSION_TEETH", "LOCAL_REFERENCES", "nut_end_lengths"]
 
 #: Teeth of an influence-matrix section: the middle tooth (4 of 7) has three on each side.
 DEFAULT_TEETH = 7
 #: The coarsest level whose diagonal entries agree with the next finer level within 0.5 %
 #: on the default design (tests/test_fe.py; docs/theory/fe.md has the convergence table).
 CONVERGED_LEVEL = 1
+#: Unloaded thread periods the screw and roller sections carry before tooth 1 and after the
+#: last engaged tooth: the real parts go on past the nut. Chosen by the convergence of the
+#: end teeth (docs/theory/fe.md, "Section ends"): with 4 the end teeth's tooth part is
+#: within 3 % of the interior ones and doubling it moves the worst coefficient by < 0.001.
+EXTENSION_TEETH = 4
+#: Where Yamamoto's beam takes its deflection, as a fraction of the tooth thickness b from
+#: the loaded flank: the local term's reference point. 1/2 is the model's; 1/4 and 1 are
+#: the documented alternatives of the model-risk study.
+LOCAL_REFERENCES = (0.25, 0.5, 1.0)
 
 
 # --------------------------------------------------------------------------- sections
@@ -146,6 +155,12 @@ class PartSection:
     body_area_mm2 : float
         The load model's body section A (screw and roller root circle, nut ring from the
         groove root to D0), for the 1D comparison p / (E A).
+    unloaded_teeth : (int, int)
+        Unloaded thread periods before the first engaged tooth and after the last: the
+        screw and the roller go on past the nut (``EXTENSION_TEETH``).
+    end_lengths_mm : (float, float)
+        Plain body beyond the thread, before and after it (mm): the nut's ends (ring gear,
+        end bores) as a ring from the thread's root radius to D0 / 2.
     """
 
     part: str
@@ -156,6 +171,8 @@ class PartSection:
     flanks: tuple[LoadedFlank, ...]
     support_face: str
     body_area_mm2: float
+    unloaded_teeth: tuple[int, int] = (0, 0)
+    end_lengths_mm: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
         if self.part not in ("screw", "roller", "nut"):
@@ -164,6 +181,20 @@ class PartSection:
             raise ValueError("support_face is 'face_z0' or 'face_z1'")
         if not self.flanks:
             raise ValueError("a part section needs at least one loaded flank")
+        if len(self.unloaded_teeth) != 2 or min(self.unloaded_teeth) < 0:
+            raise ValueError("unloaded_teeth are two counts >= 0")
+        if len(self.end_lengths_mm) != 2 or min(self.end_lengths_mm) < 0.0:
+            raise ValueError("end_lengths_mm are two lengths >= 0")
+
+    def span_mm(self, teeth: int) -> tuple[float, float]:
+        """(z0, z1) of the section's end faces with ``teeth`` engaged teeth, mm, in the mesh
+        frame (z = 0 at the start of the first thread period, unloaded ones included)."""
+        lead, trail = self.unloaded_teeth
+        return -self.end_lengths_mm[0], (lead + teeth + trail) * self.profile.pitch + self.end_lengths_mm[1]
+
+    def support_z_mm(self, teeth: int) -> float:
+        """z of the supported end face (mm, mesh frame)."""
+        return self.span_mm(teeth)[0 if self.support_face == "face_z0" else 1]
 
     def flank_geometry(self, flank: LoadedFlank) -> dict[str, float]:
         """Contact-point geometry of a loaded flank in the axial section.
@@ -185,20 +216,44 @@ class PartSection:
                 "band_dr_mm": flank.ellipse.meridian_semi_axis_mm * math.cos(phi)}
 
     def thread_section(self, teeth: int) -> ThreadSection:
-        """The meshable section with ``teeth`` periods and a break point at every band."""
+        """The meshable section with ``teeth`` engaged periods, the unloaded ones and the end
+        pieces, and a break point at every band."""
         bands = tuple((f.contact_radius_mm, self.flank_geometry(f)["band_dr_mm"]) for f in self.flanks)
-        return ThreadSection(pitch=self.profile.pitch, teeth=teeth, root_radius=self.profile.root_radius,
-                             crest_radius=self.profile.crest_radius, far_radius=self.far_radius_mm,
-                             half_width=self.profile.tooth_half_width, bands=bands)
+        return ThreadSection(pitch=self.profile.pitch, teeth=teeth + sum(self.unloaded_teeth),
+                             root_radius=self.profile.root_radius, crest_radius=self.profile.crest_radius,
+                             far_radius=self.far_radius_mm, half_width=self.profile.tooth_half_width, bands=bands,
+                             end_lengths=tuple(float(e) for e in self.end_lengths_mm))
 
 
 def _design_contact(design: PRSDesign, contact: ContactResult | None) -> ContactResult:
     return contact if contact is not None else analyse_contact(design)
 
 
-def part_sections(design: PRSDesign, contact: ContactResult | None = None) -> dict[str, PartSection]:
+def nut_end_lengths(design: PRSDesign) -> tuple[float, float]:
+    """How far the complete nut reaches beyond its thread at the loaded end (tooth 1 side)
+    and at the far end, mm: its ring gears and end pieces
+    (:func:`prs_geom.geometry.part_sections.part_section`; the flange sits on the outside
+    of that length and is left out). (0, 0) for a nut that is only its thread."""
+    from prs_geom.geometry.frames import thread_length
+    from prs_geom.geometry.part_sections import part_section
+
+    zones = [zn for zn in part_section(design, "nut").zones if zn.name != "flange"]
+    length = thread_length(design)
+    lo = max(0.0, -min(zn.z[0] for zn in zones))
+    hi = max(0.0, max(zn.z[1] for zn in zones) - length)
+    return lo, hi
+
+
+def part_sections(design: PRSDesign, contact: ContactResult | None = None,
+                  extension: int = EXTENSION_TEETH) -> dict[str, PartSection]:
     """The three part sections of a design (screw, roller, nut), with the contact points of
-    the contact stage and the Hertz bands at the design load (module docstring)."""
+    the contact stage and the Hertz bands at the design load (module docstring).
+
+    ``extension``: unloaded thread periods of the screw and the roller at each end; the nut
+    gets its real ends (:func:`nut_end_lengths`). ``extension=0`` gives the sections that
+    end at the engaged teeth (all three parts): the model-risk alternative."""
+    if extension < 0:
+        raise ValueError("extension is a number of thread periods >= 0")
     contact = _design_contact(design, contact)
     prof = ThreadProfiles.from_design(design)
     mats = design.materials
@@ -224,17 +279,20 @@ def part_sections(design: PRSDesign, contact: ContactResult | None = None) -> di
     A_r = math.pi * design.roller.minor_diameter_mm ** 2 / 4.0
     A_n = math.pi * (design.nut.outer_diameter_mm ** 2 - design.nut.major_diameter_mm ** 2) / 4.0
     screw_support = "face_z0" if design.loading.installation == "tension-compression" else "face_z1"
+    ext = (int(extension), int(extension))
+    ends = nut_end_lengths(design) if extension else (0.0, 0.0)
     return {
         "screw": PartSection("screw", contact.theoretical.profile, 0.0, mats.screw.youngs_modulus_mpa,
                              mats.screw.poisson_ratio,
-                             (LoadedFlank("screw", -1, c_rs.part_radius_mm, e_rs, z),), screw_support, A_s),
+                             (LoadedFlank("screw", -1, c_rs.part_radius_mm, e_rs, z),), screw_support, A_s,
+                             unloaded_teeth=ext),
         "roller": PartSection("roller", prof.roller, 0.0, mats.roller.youngs_modulus_mpa, mats.roller.poisson_ratio,
                               (LoadedFlank("roller_nut_side", -1, c_nr.roller_radius_mm, e_nr, 1),
                                LoadedFlank("roller_screw_side", +1, c_rs.roller_radius_mm, e_rs, 1)),
-                              "face_z0", A_r),
+                              "face_z0", A_r, unloaded_teeth=ext),
         "nut": PartSection("nut", prof.nut, 0.5 * design.nut.outer_diameter_mm, mats.nut.youngs_modulus_mpa,
                            mats.nut.poisson_ratio, (LoadedFlank("nut", +1, c_nr.part_radius_mm, e_nr, z),),
-                           "face_z0", A_n),
+                           "face_z0", A_n, end_lengths_mm=ends),
     }
 
 
@@ -277,7 +335,17 @@ class PartInfluence:
     pitch_mm : float
         Axial pitch p, mm.
     support_face : str
-        ``"face_z0"`` (z = 0) or ``"face_z1"`` (z = k p): where u_z = 0.
+        ``"face_z0"`` or ``"face_z1"``: the end face where u_z = 0.
+    support_z_mm : float
+        z of that face (mm, the frame of ``axial_position_mm``).
+    local_by_reference : (3, m) array
+        The local term of each flank with its reference point at b/4, b/2 and b from the
+        flank (``LOCAL_REFERENCES``); row 1 is ``local``.
+    unloaded_teeth : (int, int)
+        Unloaded thread periods of the section before the first engaged tooth and after the
+        last (:class:`PartSection`).
+    end_lengths_mm : (float, float)
+        Plain body beyond the thread at either end, mm (the nut's ends).
     seconds : float
         Wall time of mesh, assembly, factorisation and solves, s.
     """
@@ -298,6 +366,10 @@ class PartInfluence:
     body_per_pitch_1d: float
     pitch_mm: float
     support_face: str
+    support_z_mm: float
+    local_by_reference: NDArray
+    unloaded_teeth: tuple[int, int] = (0, 0)
+    end_lengths_mm: tuple[float, float] = (0.0, 0.0)
     seconds: float = field(default=0.0, compare=False)
 
     def __post_init__(self) -> None:
@@ -311,6 +383,8 @@ class PartInfluence:
         for name in ("local", "contacts_per_ring", "band_half_width_mm"):
             if np.shape(getattr(self, name)) != (m,):
                 raise ValueError(f"{name} must have {m} entries")
+        if np.shape(self.local_by_reference) != (len(LOCAL_REFERENCES), m):
+            raise ValueError(f"local_by_reference must be a ({len(LOCAL_REFERENCES)}, {m}) array")
         C.setflags(write=False)
         object.__setattr__(self, "matrix", C)
 
@@ -328,22 +402,29 @@ class PartInfluence:
     def body_matrix(self) -> NDArray:
         """B[i, j]: the body part of C[i, j]: the load at j passes the support-side one of
         the two load points, whose body displacement it shares, s_i s_j body[nearer]."""
-        support_z = 0.0 if self.support_face == "face_z0" else self.teeth * self.pitch_mm
-        dist = np.abs(self.axial_position_mm - support_z)
+        dist = np.abs(self.axial_position_mm - self.support_z_mm)
         nearer = np.where(dist[:, None] <= dist[None, :], np.arange(dist.size)[:, None], np.arange(dist.size)[None, :])
         s = self.axial_sign
         return s[:, None] * s[None, :] * self.body[nearer]
 
-    def tooth_matrix(self) -> NDArray:
+    def local_matrix(self, reference: float = 0.5) -> NDArray:
+        """diag(local) with the local term's reference point at ``reference`` x b from the
+        flank (one of ``LOCAL_REFERENCES``), mm/N per unit ring load."""
+        row = LOCAL_REFERENCES.index(reference)
+        return np.diag(np.repeat(np.asarray(self.local_by_reference)[row], self.teeth))
+
+    def tooth_matrix(self, reference: float = 0.5) -> NDArray:
         """T = C - B - diag(local): the teeth's own compliance with their coupling, mm/N per
         unit ring load (module docstring)."""
-        loc = np.repeat(self.local, self.teeth)
-        return self.matrix - self.body_matrix() - np.diag(loc)
+        return self.matrix - self.body_matrix() - self.local_matrix(reference)
 
 
-def band_loads(model: AxisymmetricModel, sec: PartSection, flank: LoadedFlank, teeth: int) -> tuple[NDArray, NDArray]:
+def band_loads(model: AxisymmetricModel, sec: PartSection, flank: LoadedFlank, teeth: int,
+               first: int = 0) -> tuple[NDArray, NDArray]:
     """Load vectors (N_dofs, teeth) of a unit total axial ring force on the band of
-    ``flank`` at every tooth, and the axial positions of the contact points (mm).
+    ``flank`` at every engaged tooth (mesh teeth ``first + 1 .. first + teeth``: the
+    unloaded periods before them are skipped), and the axial positions of the contact
+    points (mm, mesh frame).
 
     All bands of the flank side are assembled at once (one facet basis); each tooth's
     vector is then cut out by its own facets' degrees of freedom and scaled by its own
@@ -351,7 +432,7 @@ def band_loads(model: AxisymmetricModel, sec: PartSection, flank: LoadedFlank, t
     column carries exactly 1 N axially."""
     g = sec.flank_geometry(flank)
     side = "upper" if flank.flank > 0 else "lower"
-    facets = [model.facets_of(f"flank_{j}_{side}") for j in range(1, teeth + 1)]
+    facets = [model.facets_of(f"flank_{j}_{side}") for j in range(first + 1, first + teeth + 1)]
     rc, a_m = flank.contact_radius_mm, flank.ellipse.meridian_semi_axis_mm
     cos_phi = math.cos(g["phi_rad"])
     d_r, d_z = g["d_r"], g["d_z"]
@@ -367,7 +448,7 @@ def band_loads(model: AxisymmetricModel, sec: PartSection, flank: LoadedFlank, t
         dofs = model.dofs_of(fj)
         Fz = vec[model.dofs_of(fj, comp=1)].sum()
         out[dofs, j] = vec[dofs] / abs(Fz)
-    z_c = (np.arange(teeth) + 0.5) * sec.profile.pitch + g["u_mm"]
+    z_c = (np.arange(teeth) + first + 0.5) * sec.profile.pitch + g["u_mm"]
     return out, z_c
 
 
@@ -400,7 +481,7 @@ def part_influence(sec: PartSection, level: int = CONVERGED_LEVEL, teeth: int = 
     model = AxisymmetricModel(mesh, sec.youngs_modulus_mpa, sec.poisson_ratio, fixed=((sec.support_face, 1),))
     loads, zc, sign = [], [], []
     for f in sec.flanks:
-        v, z = band_loads(model, sec, f, teeth)
+        v, z = band_loads(model, sec, f, teeth, sec.unloaded_teeth[0])
         loads.append(v)
         zc.append(z)
         sign.append(np.full(teeth, 1.0 if sec.flank_geometry(f)["d_z"] > 0 else -1.0))
@@ -423,19 +504,25 @@ def part_influence(sec: PartSection, level: int = CONVERGED_LEVEL, teeth: int = 
     slope = np.polyfit(z_arr[inner], body[inner], 1)[0] * p
     if sec.support_face == "face_z1":
         slope = -slope
-    local = []
-    for f in sec.flanks:
-        g = sec.flank_geometry(f)
-        u_n = local_term(f.ellipse.meridian_semi_axis_mm, 0.5 * g["b_mm"], g["phi_rad"], sec.youngs_modulus_mpa,
-                         sec.poisson_ratio)
-        local.append(u_n / (2.0 * math.pi * f.contact_radius_mm * g["d_z"] ** 2))
+    local = np.array([[_local_term(sec, f, ref) for f in sec.flanks] for ref in LOCAL_REFERENCES])
     return PartInfluence(
         part=sec.part, flanks=tuple(f.name for f in sec.flanks), level=level, teeth=teeth, n_dofs=model.n_dofs,
-        matrix=C, axial_position_mm=z_arr, axial_sign=sign_arr, body=body, local=np.array(local),
+        matrix=C, axial_position_mm=z_arr, axial_sign=sign_arr, body=body, local=local[1],
         contacts_per_ring=np.array([f.contacts_per_ring for f in sec.flanks], dtype=np.float64),
         band_half_width_mm=np.array([f.ellipse.meridian_semi_axis_mm for f in sec.flanks]),
         body_per_pitch=float(slope), body_per_pitch_1d=p / (sec.youngs_modulus_mpa * sec.body_area_mm2),
-        pitch_mm=p, support_face=sec.support_face, seconds=time.perf_counter() - t0)
+        pitch_mm=p, support_face=sec.support_face, support_z_mm=sec.support_z_mm(teeth), local_by_reference=local,
+        unloaded_teeth=tuple(int(e) for e in sec.unloaded_teeth),
+        end_lengths_mm=tuple(float(e) for e in sec.end_lengths_mm), seconds=time.perf_counter() - t0)
+
+
+def _local_term(sec: PartSection, flank: LoadedFlank, reference: float) -> float:
+    """The half-plane local term of a flank's band per unit ring axial load (mm/N), its
+    reference point ``reference`` x b from the flank."""
+    g = sec.flank_geometry(flank)
+    u_n = local_term(flank.ellipse.meridian_semi_axis_mm, reference * g["b_mm"], g["phi_rad"],
+                     sec.youngs_modulus_mpa, sec.poisson_ratio)
+    return u_n / (2.0 * math.pi * flank.contact_radius_mm * g["d_z"] ** 2)
 
 
 @dataclass(frozen=True)
@@ -458,11 +545,22 @@ class InfluenceMatrices:
         """Degrees of freedom of the three models together."""
         return sum(p.n_dofs for p in self)
 
+    @property
+    def screw_extension(self) -> tuple[int, int]:
+        """Unloaded thread periods of the screw section before and after the engaged teeth."""
+        return self.screw.unloaded_teeth
+
+    @property
+    def nut_end_lengths_mm(self) -> tuple[float, float]:
+        """The nut section's plain ends beyond its thread, mm."""
+        return self.nut.end_lengths_mm
+
 
 def influence_matrices(design: PRSDesign, level: int = CONVERGED_LEVEL, teeth: int = DEFAULT_TEETH,
-                       contact: ContactResult | None = None) -> InfluenceMatrices:
-    """Screw, roller and nut influence matrices of ``design`` (module docstring)."""
-    secs = part_sections(design, contact)
+                       contact: ContactResult | None = None, extension: int = EXTENSION_TEETH) -> InfluenceMatrices:
+    """Screw, roller and nut influence matrices of ``design`` (module docstring;
+    ``extension`` as in :func:`part_sections`)."""
+    secs = part_sections(design, contact, extension)
     return InfluenceMatrices(*(part_influence(secs[p], level, teeth) for p in ("screw", "roller", "nut")))
 
 
@@ -521,9 +619,9 @@ def richardson(values: NDArray) -> tuple[NDArray, NDArray, NDArray]:
 
 
 def convergence_study(design: PRSDesign, levels: tuple[int, int, int] = (0, 1, 2), teeth: int = DEFAULT_TEETH,
-                      contact: ContactResult | None = None) -> ConvergenceStudy:
+                      contact: ContactResult | None = None, extension: int = EXTENSION_TEETH) -> ConvergenceStudy:
     """Diagonals of all influence matrices over three levels with the Richardson estimate."""
-    secs = part_sections(design, contact)
+    secs = part_sections(design, contact, extension)
     dofs: dict[str, tuple[int, ...]] = {}
     diags: dict[str, NDArray] = {}
     order, extrap, err, change = {}, {}, {}, {}
@@ -633,7 +731,7 @@ class WidthCalibration:
 
 
 def calibrate_tooth_width(design: PRSDesign, level: int = CONVERGED_LEVEL, teeth: int | None = None,
-                          contact: ContactResult | None = None) -> WidthCalibration:
+                          contact: ContactResult | None = None, extension: int = EXTENSION_TEETH) -> WidthCalibration:
     """The equivalent Yamamoto width of every part side (module docstring, docs/theory/fe.md).
 
     The FE tooth compliance is taken at the middle tooth (``teeth // 2 + 1``) of a section
@@ -643,7 +741,7 @@ def calibrate_tooth_width(design: PRSDesign, level: int = CONVERGED_LEVEL, teeth
     """
     contact = _design_contact(design, contact)
     teeth = design.thread.engaged_teeth if teeth is None else int(teeth)
-    secs = part_sections(design, contact)
+    secs = part_sections(design, contact, extension)
     infl = InfluenceMatrices(*(part_influence(secs[p], level, teeth) for p in ("screw", "roller", "nut")))
     details = build_model(design, contact).details
     yamamoto = {"screw": details.tooth_screw, "nut": details.tooth_nut,
