@@ -717,10 +717,11 @@ def harmonic_stage(ctx: BuildContext) -> None:
     from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
                                            flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
                                            write_dxf)
-    from prs_geom.harmonic.model import harmonic_report, ratio_table
+    from prs_geom.harmonic.model import harmonic_report, ratio_table, strength_warnings
 
     d = ctx.design
     ctx.results.harmonic = harmonic_report(d)
+    ctx.results.warnings += strength_warnings(d)
     ctx.write_text("ratio_table.csv", ratio_table_csv(ratio_table(d)))
     ctx.results.files += plot_ratio(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))

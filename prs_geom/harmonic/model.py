@@ -38,13 +38,16 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
+from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, harmonic_ratio, strength_limit,
+                                     tolerance_grade)
 from prs_geom.model.validation import check_name, positive, real, size
 from prs_geom.model.errors import DesignError
+from prs_geom.model.standards import GRADE_NAMES, it_tolerance_by_name_um
 
 __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "HARMONIC_FIELD_COMMENTS",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
-           "infinite_ratio_position", "speed_range", "IT_MULTIPLIERS", "IT_STEPS", "it_tolerance_um",
-           "tolerance_for_ratio", "harmonic_report", "ratio_table"]
+           "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
+           "strength_section", "strength_warnings"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -257,38 +260,15 @@ def speed_range(d: HarmonicDesign) -> dict[str, float]:
     return {"ratio_min": i_min, "ratio_max": i_max, "speed_range": i_max / i_min}
 
 
-#: ISO 286-1 tolerance-grade multipliers of the tolerance unit i (grades 5 to 12).
-IT_MULTIPLIERS = {5: 7, 6: 10, 7: 16, 8: 25, 9: 40, 10: 64, 11: 100, 12: 160}
-#: ISO 286-1 nominal size steps (mm) up to 500 mm.
-IT_STEPS = (3, 6, 10, 18, 30, 50, 80, 120, 180, 250, 315, 400, 500)
-
-
-def it_tolerance_um(diameter_mm: float, grade: int) -> float:
-    """ISO 286-1 standard tolerance (um) by the formula: IT1 = 0.8 + 0.020 D; IT5..IT12 =
-    k i with i = 0.45 D^(1/3) + 0.001 D; IT2..IT4 geometric between IT1 and IT5; D the
-    geometric mean of the size step. Unrounded formula values (the printed table rounds)."""
-    lo = 1.0
-    for hi in IT_STEPS:
-        if diameter_mm <= hi:
-            break
-        lo = hi
-    else:
-        raise ValueError("diameter above 500 mm")
-    D = math.sqrt(lo * hi) if lo > 1 else math.sqrt(1 * 3)
-    unit = 0.45 * D ** (1 / 3) + 0.001 * D
-    if grade >= 5:
-        return IT_MULTIPLIERS[grade] * unit
-    it1, it5 = 0.8 + 0.020 * D, 7 * unit
-    return it1 * (it5 / it1) ** ((grade - 1) / 4)
-
-
 def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float = 0.1) -> dict[str, Any]:
     """Radius tolerance (and ISO IT grade of the bore diameter) that keeps the ratio within
     ``ratio_error`` (relative) at the position where the ratio is ``max_ratio``.
 
     Delta = r0 / i; an error e on each of the two radii changes Delta by up to 2 e, so the
     ratio changes by 2 e / Delta relative: e = ratio_error Delta / 2. A centred diameter
-    tolerance band T gives radius errors of +-T/4, so T = 4 e.
+    tolerance band T gives radius errors of +-T/4, so T = 4 e. ``it_grade`` is the coarsest
+    ISO 286 grade (name, IT01..IT13, :mod:`prs_geom.model.standards`) whose standard
+    tolerance on the bore diameter fits in T (None: finer than IT01 needed).
     """
     if not max_ratio > 0:
         raise DesignError("max_ratio", max_ratio, "must be > 0")
@@ -297,28 +277,73 @@ def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float 
     T_um = 4.0 * e * 1e3
     dia = 2.0 * d.circular_spline.bore_large_radius_mm
     grade = None
-    for g in range(12, 0, -1):
-        if it_tolerance_um(dia, g) <= T_um:
-            grade = g
+    for name in reversed(GRADE_NAMES):
+        if it_tolerance_by_name_um(name, dia) <= T_um:
+            grade = name
             break
     return {"max_ratio": max_ratio, "ratio_error": ratio_error, "radius_difference_mm": delta,
             "radius_tolerance_um": e * 1e3, "diameter_band_um": T_um, "bore_diameter_mm": dia,
             "it_grade": grade, "ratio_change_per_um": 2e-3 / delta}
 
 
-def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[dict[str, float]]:
+def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[dict[str, Any]]:
     """The contact state at each position a (mm; default 65 positions over the control
     range), one row each: a, generatrix tilt beta and contact angle phi (deg), contact and
-    cone radius and their difference (mm), ratio."""
+    cone radius and their difference (mm), ratio (magnitude, the source's r0 / Delta), the
+    signed ratios with the circular spline and with the flexspline fixed
+    (:func:`prs_geom.harmonic.drive.harmonic_ratio`: flexspline rolling radius r0, circular
+    spline r0 + Delta) and the finest ISO 286 grade whose tolerance at the contact diameter
+    is at least Delta (:func:`prs_geom.harmonic.drive.tolerance_grade`)."""
     if a_values is None:
         a_values = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
     st = contact_state(d, a_values)
+    r0 = d.flexspline.neutral_radius_mm
+    delta = st["radius_difference_mm"]
+    signed = {m: harmonic_ratio(r0, r0 + delta, m) for m in FIXED_MEMBERS}
+    grades = tolerance_grade(delta, 2.0 * st["contact_radius_mm"])
     return [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
              "phi_deg": float(np.degrees(st["phi_rad"][k])),
              "contact_radius_mm": float(st["contact_radius_mm"][k]),
              "cone_radius_mm": float(st["cone_radius_mm"][k]),
-             "radius_difference_mm": float(st["radius_difference_mm"][k]),
-             "ratio": float(st["ratio"][k])} for k in range(len(st["a_mm"]))]
+             "radius_difference_mm": float(delta[k]),
+             "ratio": float(st["ratio"][k]),
+             "ratio_circular_spline_fixed": float(signed["circular_spline"][k]),
+             "ratio_flexspline_fixed": float(signed["flexspline"][k]),
+             "it_grade": grades[k]} for k in range(len(st["a_mm"]))]
+
+
+def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
+    f = d.flexspline
+    lo, hi = (float(radius_difference(d, a)) for a in (d.positions.min_mm, d.positions.max_mm))
+    return {key: strength_limit(mat, f.neutral_radius_mm, f.wall_thickness_mm, lo, hi)
+            for key, mat in FLEXSPLINE_MATERIALS.items()}
+
+
+def strength_warnings(d: HarmonicDesign) -> list[str]:
+    """One line per reference material whose allowed stress the design's smallest ratio
+    exceeds, with the numbers."""
+    i_lo = float(ratio(d, d.positions.min_mm))
+    return [f"flexspline strength ({key}): the {d.flexspline.wall_thickness_mm:g} mm wall bends to "
+            f"{s.stress_at_min_position_mpa:.0f} MPa at positions.min_mm (allowed "
+            f"{s.material.allowed_bending_stress_mpa:g} MPa): smallest ratio {s.min_ratio:.1f}, the design "
+            f"reaches {i_lo:.1f}" for key, s in _strength_limits(d).items() if not s.within]
+
+
+def strength_section(d: HarmonicDesign) -> list[dict[str, Any]]:
+    """The flexspline's strength limit for each reference material
+    (:data:`prs_geom.harmonic.drive.FLEXSPLINE_MATERIALS`) with the design's wall: the
+    largest radius difference, the smallest ratio, the wall stress at both ends of travel,
+    the usable speed range and whether the design's smallest ratio is within it."""
+    out = []
+    for key, s in _strength_limits(d).items():
+        mat = s.material
+        out.append({"material": key, "name": mat.name, "youngs_modulus_mpa": mat.youngs_modulus_mpa,
+                    "allowed_bending_stress_mpa": mat.allowed_bending_stress_mpa, "source": mat.source,
+                    "max_radius_difference_mm": s.max_radius_difference_mm, "min_ratio": s.min_ratio,
+                    "stress_at_min_position_mpa": s.stress_at_min_position_mpa,
+                    "stress_at_max_position_mpa": s.stress_at_max_position_mpa,
+                    "speed_range": s.speed_range, "within": s.within})
+    return out
 
 
 def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dict[str, Any]:
@@ -332,6 +357,7 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
         **rng,
         "table": ratio_table(d, a_values),
         "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
+        "strength": strength_section(d),
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
                        "see prs_geom/harmonic.py",
     }

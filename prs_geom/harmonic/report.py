@@ -58,7 +58,39 @@ def scene_payload(asm: HarmonicAssembly, colours: dict[str, str]) -> dict[str, A
 
 RATIO_COLUMNS = [("a_mm", "a (mm)"), ("beta_deg", "beta (°)"), ("phi_deg", "phi (°)"),
                  ("contact_radius_mm", "r_c (mm)"), ("cone_radius_mm", "R_c (mm)"),
-                 ("radius_difference_mm", "Delta (mm)"), ("ratio", "ratio i")]
+                 ("radius_difference_mm", "Delta (mm)"), ("ratio", "ratio i"),
+                 ("ratio_circular_spline_fixed", "i, circular spline fixed"),
+                 ("ratio_flexspline_fixed", "i, flexspline fixed"), ("it_grade", "ISO grade >= Delta")]
+#: The strength table's columns (report.json ``harmonic.strength``) and titles.
+STRENGTH_COLUMNS = [("name", "flexspline material"), ("youngs_modulus_mpa", "E (MPa)"),
+                    ("allowed_bending_stress_mpa", "allowed stress (MPa)"),
+                    ("max_radius_difference_mm", "largest Delta (mm)"), ("min_ratio", "smallest ratio"),
+                    ("stress_at_min_position_mpa", "stress at positions.min_mm (MPa)"),
+                    ("stress_at_max_position_mpa", "stress at positions.max_mm (MPa)"),
+                    ("speed_range", "usable speed range"), ("within", "design within")]
+
+
+def _ratio_table_html(rows: list[dict[str, Any]], k: str) -> str:
+    """The ratio table: the contact state, the signed ratios and the ISO grade per position."""
+    return ("<h3 id='ratio-table-title'>Ratio table</h3><p class='note'>Signed ratios: generator speed over "
+                 "output speed, negative when the output turns against the generator. ISO grade: the finest ISO 286 "
+                 "grade whose tolerance at the contact diameter is at least the radius difference (the source: "
+                 "0.0519 mm about IT8, 0.0120 mm about IT5); '&gt; IT13': coarser than the table.</p>" + table(
+        [[("> IT13" if row[c] is None else row[c]) if c == "it_grade" else row[c] for c, _ in RATIO_COLUMNS]
+         for row in rows], [h for _, h in RATIO_COLUMNS],
+        [k + "table." + c if c != "it_grade" else None for c, _ in RATIO_COLUMNS], table_id="ratio-table"))
+
+
+def _strength_html(strength: list[dict[str, Any]], k: str) -> str:
+    """The flexspline-strength section: the thin-ring stress rule and one row per material."""
+    return ("<h2 id='strength'>Flexspline strength</h2><p class='note'>The generator ovalises the flexspline "
+            "by the radius difference; the thin wall then bends with sigma = 3 E t Delta / (2 r0^2) (thin-ring "
+            "theory). The allowed stress sets the largest Delta and the smallest ratio. Materials and where "
+            "their numbers come from: " + "; ".join(prose(f"{m['name']}: {m['source']}") for m in strength)
+            + ".</p>" + table([[m[c] for c, _ in STRENGTH_COLUMNS] for m in strength],
+                              [h for _, h in STRENGTH_COLUMNS],
+                              [k + "strength." + c if c not in ("name", "within") else None
+                               for c, _ in STRENGTH_COLUMNS], table_id="strength-table"))
 
 
 def _checks_html(report: dict[str, Any]) -> str:
@@ -153,17 +185,16 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
         ["ratio at positions.max_mm", Q(rep["ratio_max"], k + "ratio_max")],
         ["speed range", Q(rep["speed_range"], k + "speed_range")]], ["quantity", "value"], table_id="speed-range"))
     parts.append("<div class='plots'>" + svg_element(ratio_svg) + "</div>")
-    parts.append("<h3 id='ratio-table-title'>Ratio table</h3>" + table(
-        [[row[c] for c, _ in RATIO_COLUMNS] for row in rep["table"]], [h for _, h in RATIO_COLUMNS],
-        [k + "table." + c for c, _ in RATIO_COLUMNS], table_id="ratio-table"))
+    parts.append(_ratio_table_html(rep["table"], k))
+    parts.append(_strength_html(rep["strength"], k))
     tol_keys = ["max_ratio", "ratio_error", "radius_difference_mm", "radius_tolerance_um", "diameter_band_um",
                 "bore_diameter_mm", None, "ratio_change_per_um"]
     parts.append("<h2 id='tolerance'>Tolerance</h2><p class='note'>Radius error e that keeps the ratio within the "
                  "relative error at the given ratio (e = error x Delta / 2), the centred diameter band T = 4 e and "
-                 "the coarsest ISO 286-1 grade meeting it on the bore diameter 2 b2 (none: finer than IT1).</p>"
+                 "the coarsest ISO 286-1 grade meeting it on the bore diameter 2 b2 (none: finer than IT01).</p>"
                  + table([[t["max_ratio"], t["ratio_error"], t["radius_difference_mm"], t["radius_tolerance_um"],
                            t["diameter_band_um"], t["bore_diameter_mm"],
-                           "none" if t["it_grade"] is None else f"IT{t['it_grade']}", t["ratio_change_per_um"]]
+                           "none" if t["it_grade"] is None else t["it_grade"], t["ratio_change_per_um"]]
                           for t in rep["tolerance"]],
                          ["ratio", "relative error", "Delta (mm)", "radius tol. e (µm)", "diameter band T (µm)",
                           "bore diameter (mm)", "ISO grade", "ratio change per µm"],

@@ -3,7 +3,7 @@
 Owns published reference data that a designer looks up rather than computes, as plain
 Python data (no file reading, no I/O), and the small functions that read it:
 
-* ISO 286-1:2010 Table 1 (standard tolerance grades IT5..IT13) and Tables 2 and 3
+* ISO 286-1:2010 Table 1 (standard tolerance grades IT01, IT0 and IT1..IT13) and Tables 2 and 3
   (fundamental deviations of the holes F, G, H, JS, K, N and the shafts e, f, g, h, js, k,
   m, n, p), for nominal sizes over 0 up to and including 500 mm, the same numbers as the
   limit-deviation tables of ISO 286-2. :func:`tolerance_zone` turns a nominal size and a
@@ -65,7 +65,8 @@ __all__ = ["DELTA_UM", "DIN472_TABLE", "FIT_KINDS", "GRADES", "HOLE_LETTERS", "H
            "HOLE_UPPER_BASE_UM", "ISO286_TABLE", "IT_GRADES_UM", "SHAFT_LETTERS", "SHAFT_LOWER_DEVIATION_UM",
            "SHAFT_UPPER_DEVIATION_UM", "SIZE_RANGES_MM", "SIZE_RANGE_UPPER_MM", "Fit", "FitLimits", "RetainingRing",
            "StandardTableError", "ToleranceZone", "din472_ring", "din472_sizes", "nearest_sizes", "it_tolerance_um", "size_range_index",
-           "size_range_mm", "tolerance_zone"]
+           "size_range_mm", "tolerance_zone", "IT_FINEST_UM", "GRADE_NAMES", "it_tolerance_by_name_um",
+           "finest_grade_at_least"]
 
 
 class StandardTableError(DesignError):
@@ -102,6 +103,11 @@ SIZE_RANGES_MM: tuple[tuple[float, float], ...] = tuple(zip((0,) + SIZE_RANGE_UP
 
 #: ISO 286-1 Table 1: standard tolerance IT (um) per grade, one value per size range.
 IT_GRADES_UM: dict[int, tuple[float, ...]] = {
+    # IT1..IT4: the fine grades (gauges, and the harmonic drive's tolerance rule)
+    1: (0.8, 1, 1, 1.2, 1.5, 1.5, 2, 2.5, 3.5, 4.5, 6, 7, 8),
+    2: (1.2, 1.5, 1.5, 2, 2.5, 2.5, 3, 4, 5, 7, 8, 9, 10),
+    3: (2, 2.5, 2.5, 3, 4, 4, 5, 6, 8, 10, 12, 13, 15),
+    4: (3, 4, 4, 5, 6, 7, 8, 10, 12, 14, 16, 18, 20),
     5: (4, 5, 6, 8, 9, 11, 13, 15, 18, 20, 23, 25, 27),
     6: (6, 8, 9, 11, 13, 16, 19, 22, 25, 29, 32, 36, 40),
     7: (10, 12, 15, 18, 21, 25, 30, 35, 40, 46, 52, 57, 63),
@@ -156,6 +162,13 @@ DELTA_UM: dict[int, tuple[float, ...]] = {
 HOLE_LETTERS: tuple[str, ...] = ("F", "G", "H", "JS", "K", "N")
 SHAFT_LETTERS: tuple[str, ...] = ("e", "f", "g", "h", "js", "k", "m", "n", "p")
 GRADES: tuple[int, ...] = tuple(sorted(IT_GRADES_UM))
+#: ISO 286-1 Table 1, the two grades finer than IT1 (named, not numbered: IT01 and IT0).
+IT_FINEST_UM: dict[str, tuple[float, ...]] = {
+    "IT01": (0.3, 0.4, 0.4, 0.5, 0.6, 0.6, 0.8, 1, 1.2, 2, 2.5, 3, 4),
+    "IT0": (0.5, 0.6, 0.6, 0.8, 1, 1, 1.2, 1.5, 2, 3, 4, 5, 6),
+}
+#: Every grade of the table, finest first, by name ("IT01", "IT0", "IT1", ... "IT13").
+GRADE_NAMES: tuple[str, ...] = tuple(IT_FINEST_UM) + tuple(f"IT{g}" for g in GRADES)
 #: How the errors name the ISO 286 table.
 ISO286_TABLE = "ISO 286 tolerance grades"
 _SYMBOL_RE = re.compile(r"^([A-Za-z]{1,2})(\d{1,2})$")
@@ -177,6 +190,26 @@ def size_range_index(nominal_mm: float) -> int:
                                       f"over 0 up to and including {SIZE_RANGE_UPPER_MM[-1]:g} mm", 0.0,
             float(SIZE_RANGE_UPPER_MM[-1]))
     return bisect_left(SIZE_RANGE_UPPER_MM, nominal_mm)
+
+
+def it_tolerance_by_name_um(name: str, nominal_mm: float) -> float:
+    """Standard tolerance (um) of the grade named ``name`` (``"IT01"``, ``"IT0"``, ``"IT1"``
+    ... ``"IT13"``) for a nominal size (mm), ISO 286-1 Table 1."""
+    if name in IT_FINEST_UM:
+        return float(IT_FINEST_UM[name][size_range_index(nominal_mm)])
+    if name not in GRADE_NAMES:
+        raise StandardTableError(ISO286_TABLE, name, f"ISO 286 grade {name!r} is not tabulated here; known: "
+                                                     f"{', '.join(GRADE_NAMES)}")
+    return it_tolerance_um(int(name[2:]), nominal_mm)
+
+
+def finest_grade_at_least(nominal_mm: float, tolerance_um: float) -> str | None:
+    """The finest ISO 286 grade (name) whose standard tolerance at ``nominal_mm`` is at least
+    ``tolerance_um``; None when even IT13 is smaller."""
+    for name in GRADE_NAMES:
+        if it_tolerance_by_name_um(name, nominal_mm) >= tolerance_um:
+            return name
+    return None
 
 
 def size_range_mm(nominal_mm: float) -> tuple[float, float]:
@@ -278,6 +311,10 @@ def _parse_symbol(symbol: str) -> tuple[str, int, bool]:
         raise StandardTableError(ISO286_TABLE, symbol,
                                  f"ISO 286 fit symbol {symbol!r}: grade IT{grade} is not tabulated; known: "
                                  f"IT{GRADES[0]}..IT{GRADES[-1]}")
+    if letter in HOLE_UPPER_BASE_UM and grade < min(DELTA_UM):
+        raise StandardTableError(ISO286_TABLE, symbol,
+                                 f"ISO 286 fit symbol {symbol!r}: {letter} is tabulated from IT{min(DELTA_UM)} "
+                                 f"(its Delta starts there)")
     return letter, grade, is_hole
 
 
@@ -313,7 +350,7 @@ def tolerance_zone(nominal_mm: float, symbol: str) -> ToleranceZone:
         Nominal size, mm, over 0 up to and including 500 (10 mm is in the 6-10 range).
     symbol : str
         Deviation letter and grade: holes F, G, H, JS, K, N; shafts e, f, g, h, js, k, m,
-        n, p; grades 5..13, e.g. ``"H7"``, ``"g6"``, ``"js5"``.
+        n, p; grades 1..13 (K and N from 3), e.g. ``"H7"``, ``"g6"``, ``"js5"``.
 
     Returns
     -------

@@ -1,0 +1,194 @@
+"""The harmonic drive family's kinematics, strength limit and tolerance grades
+(docs/theory/harmonic.md, "The drive family").
+
+Pure math, no I/O. What the source article states about the whole family of stepless
+harmonic friction drives, as functions of the quantities the geometry model
+(:mod:`prs_geom.harmonic.model`) gives:
+
+* **Kinematics of the circumference difference** (:func:`harmonic_ratio`). The flexspline
+  and the circular spline touch where the wave generator holds them together; that point
+  travels round with the generator. Rolling without slip there, the arc each member passes
+  relative to the wave is the same: r_f (w_f - w_g) = r_c (w_c - w_g), r_f and r_c the
+  rolling radii of the flexspline and the circular spline at the contact. With the circular
+  spline fixed, i = w_g / w_f = r_f / (r_f - r_c); with the flexspline fixed,
+  i = w_g / w_c = r_c / (r_c - r_f). Sign: positive when the output turns with the wave
+  generator. In an inner-wave drive (flexspline inside, r_f < r_c) the flexspline turns
+  against the generator (i < 0) and the circular spline with it; in an outer-wave drive
+  both signs flip. With teeth on both members the radii become the tooth counts:
+  -z_f / (z_c - z_f) and +z_c / (z_c - z_f) (the harmonic gear drive; :func:`toothed_ratio`).
+* **Strength limit** (:func:`flexspline_bending_stress`, :func:`strength_limit`). The
+  generator forces the flexspline's section into an oval whose radial deflection at the
+  major axis is the radius difference Delta (the flexspline must reach the circular
+  spline). A thin ring of neutral radius r and wall t bent into w = Delta cos(2 theta)
+  changes its curvature by (w'' + w) / r^2 = -3 Delta cos(2 theta) / r^2, so its wall
+  bends with the largest stress sigma = 3 E t Delta / (2 r^2) on the major and minor axes
+  (thin-ring theory, the classical harmonic-drive flexspline estimate). The allowed stress
+  sets the largest Delta and with it the smallest ratio |i| = r / Delta_max.
+* **Tolerance grades** (:func:`tolerance_grade`): for a radius difference Delta at a contact
+  diameter D, the finest ISO 286 grade whose standard tolerance at D is at least Delta
+  (:func:`prs_geom.model.standards.finest_grade_at_least`): the source relates Delta to the
+  machining grade of the two members (0.0519 mm about IT8, 0.0120 mm about IT5 near
+  107.5 mm).
+
+Units: mm, N, MPa; ratios dimensionless, signed as above.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from prs_geom.model.errors import DesignError
+from prs_geom.model.standards import finest_grade_at_least
+
+__all__ = ["FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
+           "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade"]
+
+#: The member held by the housing: the other one is the output.
+FIXED_MEMBERS = ("circular_spline", "flexspline")
+
+
+def _fixed(fixed: str) -> str:
+    if fixed not in FIXED_MEMBERS:
+        raise DesignError("fixed_member", fixed, f"must be one of {', '.join(FIXED_MEMBERS)}")
+    return fixed
+
+
+def harmonic_ratio(flexspline_radius_mm: ArrayLike, circular_radius_mm: ArrayLike,
+                   fixed: str = "circular_spline") -> NDArray[np.float64]:
+    """Signed ratio w_generator / w_output of a harmonic friction drive (module docstring).
+
+    Parameters
+    ----------
+    flexspline_radius_mm, circular_radius_mm : array_like
+        Rolling radii r_f and r_c of the two members at the contact (mm); r_f < r_c for an
+        inner-wave drive, r_f > r_c for an outer-wave one.
+    fixed : {"circular_spline", "flexspline"}
+        The member held still; the other is the output.
+    """
+    r_f = np.asarray(flexspline_radius_mm, dtype=np.float64)
+    r_c = np.asarray(circular_radius_mm, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        if _fixed(fixed) == "circular_spline":
+            return r_f / (r_f - r_c)
+        return r_c / (r_c - r_f)
+
+
+def toothed_ratio(flexspline_teeth: int, circular_teeth: int, fixed: str = "circular_spline") -> float:
+    """Signed ratio of a harmonic gear drive: -z_f / (z_c - z_f) with the circular spline
+    fixed, +z_c / (z_c - z_f) with the flexspline fixed (inner wave, z_c > z_f)."""
+    for name, z in (("flexspline_teeth", flexspline_teeth), ("circular_teeth", circular_teeth)):
+        if isinstance(z, bool) or not isinstance(z, (int, np.integer)) or z < 1:
+            raise DesignError(name, z, "must be a whole number of teeth >= 1")
+    if flexspline_teeth == circular_teeth:
+        raise DesignError("circular_teeth", circular_teeth, "must differ from flexspline_teeth (the tooth "
+                                                            "difference drives the output)")
+    return float(harmonic_ratio(float(flexspline_teeth), float(circular_teeth), fixed))
+
+
+@dataclass(frozen=True)
+class FlexsplineMaterial:
+    """Elastic modulus and allowed bending stress of a flexspline material.
+
+    Parameters
+    ----------
+    name : str
+        What it is.
+    youngs_modulus_mpa : float
+        E, MPa.
+    allowed_bending_stress_mpa : float
+        The bending stress the flexspline wall may carry in service (alternating with every
+        generator half-turn), MPa.
+    source : str
+        Where the numbers come from.
+    """
+
+    name: str
+    youngs_modulus_mpa: float
+    allowed_bending_stress_mpa: float
+    source: str
+
+    def __post_init__(self) -> None:
+        for f in ("youngs_modulus_mpa", "allowed_bending_stress_mpa"):
+            v = getattr(self, f)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise DesignError(f, v, "must be a finite number > 0 (MPa)")
+
+
+#: Reference flexspline materials: a spring/bearing steel and a polyamide (the source names
+#: metal and nylon flexsplines; the numbers are those its family issue states and the usual
+#: handbook values).
+FLEXSPLINE_MATERIALS: dict[str, FlexsplineMaterial] = {
+    "steel": FlexsplineMaterial(
+        "steel (flexspline grade, e.g. 40CrNiMoA hardened and tempered)", 206_000.0, 300.0,
+        "E: handbook value for alloy steel; 300 MPa: allowed alternating bending stress of harmonic-drive "
+        "flexsplines in the design literature (about a third of the fatigue-limited range)"),
+    "pa66": FlexsplineMaterial(
+        "polyamide PA66 (nylon 66)", 3_000.0, 25.0,
+        "E: conditioned PA66 datasheets (2.8-3.3 GPa); 25 MPa: allowed long-term bending stress of PA66 "
+        "gears and flexible parts (about a third of its flexural strength)"),
+}
+
+
+def flexspline_bending_stress(radius_difference_mm: ArrayLike, radius_mm: float, wall_mm: float,
+                              youngs_modulus_mpa: float) -> NDArray[np.float64]:
+    """Largest circumferential bending stress (MPa) of a thin ring of neutral radius
+    ``radius_mm`` and wall ``wall_mm`` ovalised to a radial deflection Delta at its major
+    axis: sigma = 3 E t Delta / (2 r^2) (module docstring)."""
+    delta = np.abs(np.asarray(radius_difference_mm, dtype=np.float64))
+    return 3.0 * youngs_modulus_mpa * wall_mm * delta / (2.0 * radius_mm ** 2)
+
+
+@dataclass(frozen=True)
+class StrengthLimit:
+    """What the flexspline's allowed stress permits.
+
+    Attributes
+    ----------
+    material : FlexsplineMaterial
+        The material.
+    max_radius_difference_mm : float
+        The largest Delta before the wall reaches the allowed stress, mm.
+    min_ratio : float
+        The smallest |ratio| that follows, r0 / Delta_max (circular spline fixed).
+    stress_at_min_position_mpa, stress_at_max_position_mpa : float
+        The wall's bending stress at the design's two ends of travel, MPa.
+    speed_range : float
+        |ratio| at the largest position over the larger of the design's smallest |ratio|
+        and ``min_ratio``: the range the drive may use.
+    within : bool
+        True when the design's smallest |ratio| is at least ``min_ratio``.
+    """
+
+    material: FlexsplineMaterial
+    max_radius_difference_mm: float
+    min_ratio: float
+    stress_at_min_position_mpa: float
+    stress_at_max_position_mpa: float
+    speed_range: float
+    within: bool
+
+
+def strength_limit(material: FlexsplineMaterial, neutral_radius_mm: float, wall_mm: float,
+                   delta_at_min_mm: float, delta_at_max_mm: float) -> StrengthLimit:
+    """The strength limit of a flexspline (module docstring) against a design whose radius
+    difference runs from ``delta_at_min_mm`` (smallest ratio) to ``delta_at_max_mm``."""
+    k = flexspline_bending_stress(1.0, neutral_radius_mm, wall_mm, material.youngs_modulus_mpa)
+    d_max = material.allowed_bending_stress_mpa / float(k)
+    i_min = neutral_radius_mm / d_max
+    s_lo = float(k) * abs(delta_at_min_mm)
+    s_hi = float(k) * abs(delta_at_max_mm)
+    i_design_min = neutral_radius_mm / abs(delta_at_min_mm)
+    i_design_max = neutral_radius_mm / abs(delta_at_max_mm)
+    return StrengthLimit(material, d_max, i_min, s_lo, s_hi, i_design_max / max(i_design_min, i_min),
+                         i_design_min >= i_min)
+
+
+def tolerance_grade(radius_difference_mm: ArrayLike, contact_diameter_mm: ArrayLike) -> list[str | None]:
+    """Per position: the finest ISO 286 grade whose standard tolerance at the contact
+    diameter is at least the radius difference (None: coarser than IT13)."""
+    d = np.atleast_1d(np.abs(np.asarray(radius_difference_mm, dtype=np.float64)))
+    dia = np.broadcast_to(np.asarray(contact_diameter_mm, dtype=np.float64), d.shape)
+    return [finest_grade_at_least(float(D), float(x) * 1e3) for x, D in zip(d, dia)]

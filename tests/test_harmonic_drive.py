@@ -1,0 +1,108 @@
+"""The harmonic drive family's kinematics, strength limit and tolerance grades
+(prs_geom.harmonic.drive; issue 35)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, flexspline_bending_stress, harmonic_ratio, strength_limit,
+                                     tolerance_grade, toothed_ratio)
+from prs_geom.harmonic.model import HarmonicDesign, radius_difference, ratio_table, strength_section
+from prs_geom.model.errors import DesignError
+
+
+def _willis(r_f: float, r_c: float, fixed: str) -> float:
+    """The same ratio by a second path: Willis' equation of the differential whose carrier is
+    the wave generator, r_f (w_f - w_g) = r_c (w_c - w_g) (no slip at the travelling contact),
+    with the generator at w_g = 1 and the fixed member at rest, solved as a linear system."""
+    # unknowns [w_f, w_c]; rows: rolling, fixed member at rest
+    A = np.array([[r_f, -r_c], [1.0, 0.0] if fixed == "flexspline" else [0.0, 1.0]])
+    b = np.array([r_f - r_c, 0.0])
+    w_f, w_c = np.linalg.solve(A, b)
+    return 1.0 / (w_c if fixed == "flexspline" else w_f)
+
+
+@pytest.mark.parametrize("r_f, r_c", [(50.0, 50.0519), (50.0, 52.5667), (53.0, 50.0), (10.0, 10.4)])
+@pytest.mark.parametrize("fixed", ["circular_spline", "flexspline"])
+def test_ratio_equals_the_rolling_system(r_f, r_c, fixed):
+    assert float(harmonic_ratio(r_f, r_c, fixed)) == pytest.approx(_willis(r_f, r_c, fixed), rel=1e-12)
+
+
+def test_output_direction_per_fixed_member():
+    """Inner wave (flexspline inside): with the circular spline fixed the flexspline turns
+    against the generator, with the flexspline fixed the circular spline turns with it; an
+    outer-wave drive (flexspline outside) reverses both."""
+    assert harmonic_ratio(50.0, 50.1, "circular_spline") < 0 < harmonic_ratio(50.0, 50.1, "flexspline")
+    assert harmonic_ratio(50.1, 50.0, "circular_spline") > 0 > harmonic_ratio(50.1, 50.0, "flexspline")
+
+
+def test_toothed_ratio_is_teeth_over_tooth_difference():
+    """The harmonic gear drive: -z_f / (z_c - z_f) with the circular spline fixed and
+    +z_c / (z_c - z_f) with the flexspline fixed (200 / 202 teeth: -100 and +101, the
+    textbook harmonic drive)."""
+    assert toothed_ratio(200, 202, "circular_spline") == pytest.approx(-100.0, rel=1e-15)
+    assert toothed_ratio(200, 202, "flexspline") == pytest.approx(101.0, rel=1e-15)
+    for zf, zc in ((100, 102), (160, 162), (98, 100)):
+        assert toothed_ratio(zf, zc) == pytest.approx(-zf / (zc - zf))
+        assert toothed_ratio(zf, zc, "flexspline") == pytest.approx(zc / (zc - zf))
+    with pytest.raises(DesignError, match="circular_teeth"):
+        toothed_ratio(100, 100)
+    with pytest.raises(DesignError, match="fixed_member"):
+        toothed_ratio(100, 102, "housing")
+
+
+def test_signed_ratios_of_the_worked_example():
+    """The published magnitudes are the circular-spline-fixed ratio; with the flexspline
+    fixed the output is the circular spline and the ratio is one more, positive."""
+    rows = ratio_table(HarmonicDesign(), [42.0, 73.0, 73.5, 74.0])
+    for row in rows:
+        assert row["ratio_circular_spline_fixed"] == pytest.approx(-row["ratio"], rel=1e-12)
+        assert row["ratio_flexspline_fixed"] == pytest.approx(row["ratio"] + 1.0, rel=1e-12)
+    assert [round(r["ratio"], 1) for r in rows[1:]] == [545.0, 963.6, 4155.1]
+
+
+def test_iso_grades_at_the_published_positions():
+    """The source: at a = 73.5 the radius difference 0.0519 mm is about the grade-8 tolerance
+    of that size, at a = 74 the 0.0120 mm about grade 5 (contact diameter 107.5 mm, ISO 286
+    80-120 mm: IT8 54 um, IT5 15 um, IT4 10 um)."""
+    rows = ratio_table(HarmonicDesign(), [73.5, 74.0])
+    assert [round(r["radius_difference_mm"], 4) for r in rows] == [0.0519, 0.0120]
+    assert [round(r["contact_radius_mm"], 3) for r in rows] == [53.773, 53.772]
+    assert [r["it_grade"] for r in rows] == ["IT8", "IT5"]
+    # at a = 42 the 2.57 mm difference is coarser than any grade of the table
+    assert tolerance_grade(2.5667, 107.6) == [None]
+
+
+def test_strength_limit_of_steel_and_nylon_flexsplines():
+    """The source: the smallest ratio is about 20 for metal flexsplines and below 10 for
+    plastics such as nylon. The worked example's geometry with its 1.0 mm wall: steel
+    (E 206 GPa, 300 MPa allowed) between 15 and 30, PA66 (E 3 GPa, 25 MPa) below 10."""
+    d = HarmonicDesign()
+    assert d.flexspline.wall_thickness_mm == 1.0
+    by = {m["material"]: m for m in strength_section(d)}
+    steel, pa66 = by["steel"], by["pa66"]
+    assert FLEXSPLINE_MATERIALS["steel"].youngs_modulus_mpa == 206_000.0
+    assert 15.0 < steel["min_ratio"] < 30.0 and pa66["min_ratio"] < 10.0
+    # sigma = 3 E t Delta / (2 r^2): steel 123.6 MPa per mm of Delta on r0 = 50 mm
+    assert float(flexspline_bending_stress(1.0, 50.0, 1.0, 206_000.0)) == pytest.approx(123.6, rel=1e-12)
+    assert steel["min_ratio"] == pytest.approx(50.0 / (300.0 / 123.6), rel=1e-12)
+    # the example's smallest ratio 19.5 (a = 42) bends a steel wall past 300 MPa: flagged
+    lo = float(radius_difference(d, 42.0))
+    assert steel["stress_at_min_position_mpa"] == pytest.approx(123.6 * lo, rel=1e-12)
+    assert steel["stress_at_min_position_mpa"] > 300.0
+    assert not steel["within"] and pa66["within"]
+    s = strength_limit(FLEXSPLINE_MATERIALS["steel"], 50.0, 1.0, 2.0, 0.05)
+    assert s.within and s.speed_range == pytest.approx((50 / 0.05) / (50 / 2.0))
+
+
+def test_thin_ring_stress_by_a_second_path():
+    """sigma = 3 E t Delta / (2 r^2) against the curvature change of w = Delta cos(2 theta)
+    computed numerically: kappa = (w'' + w) / r^2, sigma = E (t / 2) max |kappa|."""
+    r, t, E, delta = 50.0, 1.0, 206_000.0, 0.3
+    theta = np.linspace(0.0, 2.0 * np.pi, 20001)
+    w = delta * np.cos(2.0 * theta)
+    h = theta[1] - theta[0]
+    w2 = np.gradient(np.gradient(w, h), h)
+    kappa = (w2 + w) / r ** 2
+    sigma = E * 0.5 * t * np.abs(kappa[100:-100]).max()
+    assert float(flexspline_bending_stress(delta, r, t, E)) == pytest.approx(sigma, rel=1e-5)
