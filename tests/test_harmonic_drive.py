@@ -2,6 +2,8 @@
 (prs_geom.harmonic.drive; issue 35)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,81 @@ def test_thin_ring_stress_by_a_second_path():
     kappa = (w2 + w) / r ** 2
     sigma = E * 0.5 * t * np.abs(kappa[100:-100]).max()
     assert float(flexspline_bending_stress(delta, r, t, E)) == pytest.approx(sigma, rel=1e-5)
+
+
+# --------------------------------------------------------------------------- the [drive] section (format 3)
+def test_earlier_example_files_still_read():
+    """Every example file of format 2 (tests/data/v2, the examples before the [drive]
+    section) reads and equals today's example: the new section's defaults are the published
+    example's arrangement."""
+    from pathlib import Path
+
+    from prs_geom.pipeline import load_any_design
+
+    root = Path(__file__).resolve().parent
+    for f in sorted((root / "data" / "v2").glob("*.toml")):
+        assert load_any_design(f) == load_any_design(root.parent / "examples" / f.name), f.name
+
+
+def test_drive_section_is_validated_naming_the_field():
+    from prs_geom.harmonic.model import Drive
+
+    for kwargs, fld in (({"fixed_member": "housing"}, "fixed_member"), ({"flexspline_material": "wood"},
+                        "flexspline_material"), ({"friction_coefficient": 0.8}, "friction_coefficient"),
+                        ({"slip_safety_factor": 0.5}, "slip_safety_factor"),
+                        ({"adjusting_mechanism": "lever"}, "adjusting_mechanism"),
+                        ({"adjusting_travel_per_turn_mm": 0.0}, "adjusting_travel_per_turn_mm")):
+        with pytest.raises(DesignError) as exc:
+            Drive(**kwargs)
+        assert exc.value.field == fld
+
+
+def test_pressing_force_torque_and_contact_pressure():
+    """On the 4.57 deg cone the normal force is the axial pressing force / sin(alpha), 12.54
+    times; the output torque is mu N r_c / S; the generator's is that over |ratio|; Hertz's
+    pressure and ellipse against the closed form of a sphere on a plane."""
+    from prs_geom.harmonic.drive import contact_load
+    from prs_geom.harmonic.model import contact_state, design_ratio, drive_load
+
+    d = HarmonicDesign()
+    st = contact_state(d, np.array([42.0, 60.0, 73.5]))
+    load = drive_load(d, st)
+    assert load.normal_force_n[0] / 500.0 == pytest.approx(1.0 / np.sin(np.radians(4.5739)), rel=1e-4)
+    assert load.normal_force_n[0] / 500.0 == pytest.approx(12.54, abs=0.01)
+    np.testing.assert_allclose(load.output_torque_nm, 0.1 * load.normal_force_n * st["contact_radius_mm"] / 1.5e3,
+                               rtol=1e-12)
+    np.testing.assert_allclose(load.input_torque_nm,
+                               load.output_torque_nm / np.abs(design_ratio(d, st["a_mm"])), rtol=1e-12)
+    # the contact conforms more as Delta shrinks: the ellipse grows round the circumference
+    assert np.all(np.diff(load.semi_axes_mm[:, 1]) > 0) and load.hertz_valid[0] and not load.hertz_valid[-1]
+    # second path, a closed form: made a sphere on a plane (arc radius 10 mm, circumferential
+    # curvature 1/10 mm, a flat bore), the contact is circular, a = (3 Q R eta / 4)^(1/3)
+    mat = FLEXSPLINE_MATERIALS["steel"]
+    alpha = np.radians(30.0)
+    R = 10.0
+    # the flexspline's circumferential curvature cos(alpha) (1/r_c + 3 Delta / r0^2) = 1/R with Delta = 0
+    r_c = np.cos(alpha) * R
+    c = contact_load(alpha, R, 50.0, r_c, 1e12, 0.0, 100.0, 1000.0, 0.1, 1.0, mat)
+    eta = 2 * (1 - 0.3 ** 2) / 206_000.0
+    Q = 0.5 * 1000.0 / np.sin(alpha)
+    a = (3 * Q * R * eta / 4) ** (1 / 3)
+    np.testing.assert_allclose(c.semi_axes_mm[0], [a, a], rtol=1e-6)
+    assert c.max_pressure_mpa[0] == pytest.approx(3 * Q / (2 * np.pi * a * a), rel=1e-6)
+
+
+def test_adjusting_mechanism_turns_and_resolution():
+    """Turns from positions.min_mm = travel / lead; the resolution is the signed ratio's
+    derivative times the lead per degree, checked against a finite difference of the ratio
+    over one degree of the adjusting input."""
+    from prs_geom.harmonic.model import adjusting, design_ratio
+
+    d = HarmonicDesign()
+    a = np.array([50.0, 70.0, 73.5])
+    turns, per_degree = adjusting(d, a)
+    np.testing.assert_allclose(turns, (a - 42.0) / 1.0)
+    step = 1.0 / 360.0                                   # one degree of a 1 mm lead screw, mm
+    fd = (design_ratio(d, a + step / 2) - design_ratio(d, a - step / 2))
+    np.testing.assert_allclose(per_degree, fd, rtol=2e-3)
+    assert np.all(per_degree < 0)                        # circular spline fixed: the ratio grows negative
+    ff = replace(d, drive=replace(d.drive, fixed_member="flexspline"))
+    assert np.all(adjusting(ff, a)[1] > 0)

@@ -433,7 +433,9 @@ def test_harmonic_build_writes_its_name_literally(tmp_path):
     build(design, out)
     header, *rows = list(csv.reader(io.StringIO((out / "ratio_table.csv").read_text(encoding="utf-8"),
                                                 newline="")))
-    assert rows and all(_is_number(f) for row in rows for f in row)
+    words = {"it_grade": lambda f: f == "" or re.fullmatch(r"IT(01|0|[1-9]|1[0-3])", f),
+             "hertz_valid": lambda f: f in ("True", "False")}
+    assert rows and all(words.get(h, _is_number)(f) for row in rows for h, f in zip(header, row))
     assert not any(_begins(f, DANGER) for f in header)
     texts = _dxf_texts(out / "axial_sections.dxf")
     assert any(t.startswith(hostile + ": harmonic friction drive") for t in texts)

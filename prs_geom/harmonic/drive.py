@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import finest_grade_at_least
 
-__all__ = ["FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
+__all__ = ["ContactLoad", "contact_load", "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
            "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade"]
 
 #: The member held by the housing: the other one is the output.
@@ -103,12 +103,15 @@ class FlexsplineMaterial:
         generator half-turn), MPa.
     source : str
         Where the numbers come from.
+    poisson_ratio : float
+        nu (for the contact's elastic constant).
     """
 
     name: str
     youngs_modulus_mpa: float
     allowed_bending_stress_mpa: float
     source: str
+    poisson_ratio: float = 0.3
 
     def __post_init__(self) -> None:
         for f in ("youngs_modulus_mpa", "allowed_bending_stress_mpa"):
@@ -128,7 +131,7 @@ FLEXSPLINE_MATERIALS: dict[str, FlexsplineMaterial] = {
     "pa66": FlexsplineMaterial(
         "polyamide PA66 (nylon 66)", 3_000.0, 25.0,
         "E: conditioned PA66 datasheets (2.8-3.3 GPa); 25 MPa: allowed long-term bending stress of PA66 "
-        "gears and flexible parts (about a third of its flexural strength)"),
+        "gears and flexible parts (about a third of its flexural strength); nu 0.39", 0.39),
 }
 
 
@@ -192,3 +195,77 @@ def tolerance_grade(radius_difference_mm: ArrayLike, contact_diameter_mm: ArrayL
     d = np.atleast_1d(np.abs(np.asarray(radius_difference_mm, dtype=np.float64)))
     dia = np.broadcast_to(np.asarray(contact_diameter_mm, dtype=np.float64), d.shape)
     return [finest_grade_at_least(float(D), float(x) * 1e3) for x, D in zip(d, dia)]
+
+
+#: The circular spline's material for the contact (steel, E 206 GPa, nu 0.3).
+CIRCULAR_SPLINE_STEEL = (206_000.0, 0.3)
+#: Hertz's quadratic gap holds while the circumferential semi-axis is below this fraction of
+#: the contact radius (the ovalised flexspline's gap follows cos 2 theta, not a parabola,
+#: beyond it).
+HERTZ_VALID_FRACTION = 0.1
+
+
+@dataclass(frozen=True)
+class ContactLoad:
+    """Forces, torques and contact pressure at each position (arrays over the positions).
+
+    Attributes
+    ----------
+    normal_force_n : ndarray
+        Total normal force on the cone, F / sin(alpha) (both contact zones), N.
+    output_torque_nm, input_torque_nm : ndarray
+        Transmissible torque on the output member, mu N r / S (N m), and on the generator,
+        the output torque over |ratio| (no losses counted), N m.
+    max_pressure_mpa : ndarray
+        Hertz's largest pressure of one contact zone (half the normal force), MPa.
+    semi_axes_mm : ndarray (n, 2)
+        Meridian and circumferential semi-axes of the contact ellipse, mm.
+    hertz_valid : ndarray of bool
+        The circumferential semi-axis is below ``HERTZ_VALID_FRACTION`` of the contact radius.
+    """
+
+    normal_force_n: NDArray[np.float64]
+    output_torque_nm: NDArray[np.float64]
+    input_torque_nm: NDArray[np.float64]
+    max_pressure_mpa: NDArray[np.float64]
+    semi_axes_mm: NDArray[np.float64]
+    hertz_valid: NDArray[np.bool_]
+
+
+def contact_load(alpha_rad: float, arc_radius_mm: float, neutral_radius_mm: float, contact_radius_mm: ArrayLike,
+                 cone_radius_mm: ArrayLike, radius_difference_mm: ArrayLike, ratio: ArrayLike,
+                 pressing_force_n: float, friction_coefficient: float, slip_safety_factor: float,
+                 material: FlexsplineMaterial) -> ContactLoad:
+    """The contact's forces, torque capacity and Hertz pressure (docs/theory/harmonic.md,
+    "Pressing force and torque").
+
+    On a cone of half-angle alpha the pressing device's axial force F becomes the normal force
+    N = F / sin(alpha), shared by the two contact zones of the elliptical generator. The
+    friction force mu N acts at the contact radius: the output member carries
+    T = mu N r_c / S. Each zone is a Hertz contact: meridian curvatures 1 / r_s (the arc) and
+    0 (the cone line); circumferential, the ovalised flexspline at its major axis,
+    1 / r_c + 3 Delta / r0^2 (thin ring), against the bore, -1 / R_c, both times cos(alpha)
+    (normal curvature of a surface of revolution). The pair nearly conforms around the
+    circumference, so the ellipse is long there; Hertz holds while that semi-axis is small
+    against r_c (``hertz_valid``)."""
+    from prs_geom.analysis.hertz import hertz_contact
+
+    r_c = np.atleast_1d(np.asarray(contact_radius_mm, dtype=np.float64))
+    R_c = np.broadcast_to(np.asarray(cone_radius_mm, dtype=np.float64), r_c.shape)
+    delta = np.broadcast_to(np.asarray(radius_difference_mm, dtype=np.float64), r_c.shape)
+    i = np.broadcast_to(np.asarray(ratio, dtype=np.float64), r_c.shape)
+    normal = np.full(r_c.shape, pressing_force_n / math.sin(alpha_rad))
+    torque = friction_coefficient * normal * r_c / slip_safety_factor * 1e-3
+    E_c, nu_c = CIRCULAR_SPLINE_STEEL
+    eta = (1 - material.poisson_ratio ** 2) / material.youngs_modulus_mpa + (1 - nu_c ** 2) / E_c
+    ca = math.cos(alpha_rad)
+    p_max, axes = np.empty(r_c.shape), np.empty(r_c.shape + (2,))
+    for k in range(r_c.size):     # a handful of positions; each a scalar Hertz solve
+        flex = ca * (1.0 / r_c[k] + 3.0 * delta[k] / neutral_radius_mm ** 2)
+        h = hertz_contact((1.0 / arc_radius_mm, flex, 0.0, -ca / R_c[k]), eta)
+        a, b = h.semi_axes(0.5 * normal[k])
+        p_max[k] = 3.0 * 0.5 * normal[k] / (2.0 * math.pi * a * b)
+        # plane 1 is the meridian, plane 2 the circumference
+        axes[k] = (a, b) if h.major_in_plane_1 else (b, a)
+    valid = axes[:, 1] <= HERTZ_VALID_FRACTION * r_c
+    return ContactLoad(normal, torque, torque / np.abs(i), p_max, axes, valid)

@@ -38,16 +38,17 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
-from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, harmonic_ratio, strength_limit,
-                                     tolerance_grade)
+from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, contact_load, harmonic_ratio,
+                                     strength_limit, tolerance_grade)
 from prs_geom.model.validation import check_name, positive, real, size
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import GRADE_NAMES, it_tolerance_by_name_um
 
-__all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "HARMONIC_FIELD_COMMENTS",
+__all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive", "ADJUSTING_MECHANISMS",
+           "HARMONIC_FIELD_COMMENTS",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
-           "strength_section", "strength_warnings"]
+           "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -117,6 +118,66 @@ class HarmonicMesh:
         object.__setattr__(self, "chord_tolerance_mm", t)
 
 
+#: Adjusting mechanisms the source names (screw and nut, ball screw, worm gear, rack and
+#: pinion, gear train); each is described by its axial travel per turn of its input.
+ADJUSTING_MECHANISMS = ("screw", "ball-screw", "worm", "rack", "gears")
+
+
+@dataclass(frozen=True)
+class Drive:
+    """How the drive is held, pressed and adjusted (design section ``[drive]``, format 3).
+
+    Parameters
+    ----------
+    fixed_member : str
+        ``"circular_spline"`` (the flexspline is the output, turning against the generator)
+        or ``"flexspline"`` (the circular spline is the output, turning with it).
+    flexspline_material : str
+        A key of :data:`prs_geom.harmonic.drive.FLEXSPLINE_MATERIALS` (``"steel"``, ``"pa66"``):
+        the strength check and the contact's elastic constants.
+    friction_coefficient : float
+        Traction coefficient at the contact (lubricated steel on steel: 0.05 to 0.1).
+    pressing_force_n : float
+        Axial force of the pressing device (spring, cone discs, nut), N.
+    slip_safety_factor : float
+        The transmissible torque is divided by it (>= 1).
+    adjusting_mechanism : str
+        One of :data:`ADJUSTING_MECHANISMS` (for the record; its effect is the travel).
+    adjusting_travel_per_turn_mm : float
+        Axial travel of the circular spline per turn of the adjusting input, mm (a screw's
+        lead; a worm or gear train divides it by its ratio).
+    """
+
+    fixed_member: str = "circular_spline"
+    flexspline_material: str = "steel"
+    friction_coefficient: float = 0.1
+    pressing_force_n: float = 500.0
+    slip_safety_factor: float = 1.5
+    adjusting_mechanism: str = "screw"
+    adjusting_travel_per_turn_mm: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.fixed_member not in FIXED_MEMBERS:
+            raise DesignError("fixed_member", self.fixed_member, f"must be one of {', '.join(FIXED_MEMBERS)}")
+        if self.flexspline_material not in FLEXSPLINE_MATERIALS:
+            raise DesignError("flexspline_material", self.flexspline_material,
+                              f"must be one of {', '.join(FLEXSPLINE_MATERIALS)}")
+        if self.adjusting_mechanism not in ADJUSTING_MECHANISMS:
+            raise DesignError("adjusting_mechanism", self.adjusting_mechanism,
+                              f"must be one of {', '.join(ADJUSTING_MECHANISMS)}")
+        mu = positive("friction_coefficient", self.friction_coefficient)
+        if mu > 0.5:
+            raise DesignError("friction_coefficient", mu, "must be at most 0.5 (a traction coefficient)")
+        object.__setattr__(self, "friction_coefficient", mu)
+        object.__setattr__(self, "pressing_force_n", positive("pressing_force_n", self.pressing_force_n))
+        sf = positive("slip_safety_factor", self.slip_safety_factor)
+        if sf < 1.0:
+            raise DesignError("slip_safety_factor", sf, "must be at least 1")
+        object.__setattr__(self, "slip_safety_factor", sf)
+        object.__setattr__(self, "adjusting_travel_per_turn_mm",
+                           positive("adjusting_travel_per_turn_mm", self.adjusting_travel_per_turn_mm))
+
+
 #: Comments written above each key of a harmonic design file (unit and meaning).
 HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "kind": '"prs" (default) or "harmonic"',
@@ -132,6 +193,13 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "positions.min_mm": "smallest position a of the cone small end from the flexspline bottom (mm)",
     "positions.max_mm": "largest position a (mm), below the infinite-ratio position",
     "positions.drawing_mm": "positions a drawn in the DXF (mm)",
+    "drive.fixed_member": '"circular_spline" (flexspline output, turns against the generator) or "flexspline"',
+    "drive.flexspline_material": '"steel" or "pa66": strength limit and contact elasticity',
+    "drive.friction_coefficient": "traction coefficient at the contact (lubricated steel 0.05-0.1)",
+    "drive.pressing_force_n": "axial force of the pressing device (spring, cone discs, nut) (N)",
+    "drive.slip_safety_factor": "transmissible torque divided by this (>= 1)",
+    "drive.adjusting_mechanism": '"screw", "ball-screw", "worm", "rack" or "gears"',
+    "drive.adjusting_travel_per_turn_mm": "axial travel of the circular spline per adjusting-input turn (mm)",
 }
 
 
@@ -160,6 +228,7 @@ class HarmonicDesign:
     circular_spline: CircularSpline = field(default_factory=CircularSpline)
     positions: Positions = field(default_factory=Positions)
     mesh: HarmonicMesh = field(default_factory=HarmonicMesh)
+    drive: Drive = field(default_factory=Drive)
 
     def __post_init__(self) -> None:
         check_name(self.name)
@@ -301,6 +370,8 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
     delta = st["radius_difference_mm"]
     signed = {m: harmonic_ratio(r0, r0 + delta, m) for m in FIXED_MEMBERS}
     grades = tolerance_grade(delta, 2.0 * st["contact_radius_mm"])
+    load = drive_load(d, st)
+    turns, per_degree = adjusting(d, st["a_mm"])
     return [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
              "phi_deg": float(np.degrees(st["phi_rad"][k])),
              "contact_radius_mm": float(st["contact_radius_mm"][k]),
@@ -309,7 +380,47 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
              "ratio": float(st["ratio"][k]),
              "ratio_circular_spline_fixed": float(signed["circular_spline"][k]),
              "ratio_flexspline_fixed": float(signed["flexspline"][k]),
-             "it_grade": grades[k]} for k in range(len(st["a_mm"]))]
+             "it_grade": grades[k],
+             "adjusting_turns": float(turns[k]), "ratio_change_per_degree": float(per_degree[k]),
+             "output_torque_nm": float(load.output_torque_nm[k]), "input_torque_nm": float(load.input_torque_nm[k]),
+             "contact_pressure_mpa": float(load.max_pressure_mpa[k]),
+             "circumferential_semi_axis_mm": float(load.semi_axes_mm[k, 1]),
+             "hertz_valid": bool(load.hertz_valid[k])} for k in range(len(st["a_mm"]))]
+
+
+def design_ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    """The signed ratio (generator over output speed) of the design's fixed member
+    (``drive.fixed_member``) at positions a (mm)."""
+    r0 = d.flexspline.neutral_radius_mm
+    return harmonic_ratio(r0, r0 + radius_difference(d, a), d.drive.fixed_member)
+
+
+def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]] | None = None):
+    """The contact's forces, torques and pressure at the positions of ``state``
+    (:func:`contact_state`; default the 65 of the ratio table), for the design's pressing
+    force, friction, safety factor and flexspline material
+    (:func:`prs_geom.harmonic.drive.contact_load`)."""
+    if state is None:
+        state = contact_state(d, np.linspace(d.positions.min_mm, d.positions.max_mm, 65))
+    dr = d.drive
+    return contact_load(d.alpha, d.flexspline.arc_radius_mm, d.flexspline.neutral_radius_mm,
+                        state["contact_radius_mm"], state["cone_radius_mm"], state["radius_difference_mm"],
+                        design_ratio(d, state["a_mm"]), dr.pressing_force_n, dr.friction_coefficient,
+                        dr.slip_safety_factor, FLEXSPLINE_MATERIALS[dr.flexspline_material])
+
+
+def adjusting(d: HarmonicDesign, a: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(turns of the adjusting input from positions.min_mm, change of the design's signed
+    ratio per degree of the adjusting input) at positions a (mm). The derivative is a central
+    difference of the closed-form ratio with a step of 1e-6 mm (relative error about 1e-6
+    where the ratio's curvature is largest)."""
+    a = np.asarray(a, dtype=np.float64)
+    travel = d.drive.adjusting_travel_per_turn_mm
+    h = 1e-6
+    hi = np.minimum(a + h, d.positions.max_mm)
+    lo = np.maximum(a - h, d.positions.min_mm)
+    slope = (design_ratio(d, hi) - design_ratio(d, lo)) / (hi - lo)
+    return (a - d.positions.min_mm) / travel, slope * travel / 360.0
 
 
 def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
@@ -320,13 +431,44 @@ def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
 
 
 def strength_warnings(d: HarmonicDesign) -> list[str]:
-    """One line per reference material whose allowed stress the design's smallest ratio
-    exceeds, with the numbers."""
+    """A line when the design's smallest ratio bends its flexspline (``drive.flexspline_material``)
+    past the allowed stress, with the numbers; and when Hertz's model of the contact does not
+    hold at some positions."""
     i_lo = float(ratio(d, d.positions.min_mm))
-    return [f"flexspline strength ({key}): the {d.flexspline.wall_thickness_mm:g} mm wall bends to "
-            f"{s.stress_at_min_position_mpa:.0f} MPa at positions.min_mm (allowed "
-            f"{s.material.allowed_bending_stress_mpa:g} MPa): smallest ratio {s.min_ratio:.1f}, the design "
-            f"reaches {i_lo:.1f}" for key, s in _strength_limits(d).items() if not s.within]
+    key = d.drive.flexspline_material
+    s = _strength_limits(d)[key]
+    out = [] if s.within else [
+        f"flexspline strength ({key}): the {d.flexspline.wall_thickness_mm:g} mm wall bends to "
+        f"{s.stress_at_min_position_mpa:.0f} MPa at positions.min_mm (allowed "
+        f"{s.material.allowed_bending_stress_mpa:g} MPa): smallest ratio {s.min_ratio:.1f}, the design "
+        f"reaches {i_lo:.1f}"]
+    return out
+
+
+def drive_section(d: HarmonicDesign) -> dict[str, Any]:
+    """report.json's ``harmonic.drive``: the fixed member and the signed ratio range, the
+    pressing force and the cone's normal force, the torque range, where Hertz's contact model
+    holds, the adjusting mechanism's range and resolution."""
+    dr = d.drive
+    a = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
+    st = contact_state(d, a)
+    load = drive_load(d, st)
+    turns, per_degree = adjusting(d, a)
+    i = design_ratio(d, a)
+    valid = a[load.hertz_valid]
+    return {"fixed_member": dr.fixed_member, "output": "flexspline" if dr.fixed_member == "circular_spline"
+            else "circular_spline", "ratio_at_min_position": float(i[0]), "ratio_at_max_position": float(i[-1]),
+            "flexspline_material": dr.flexspline_material, "pressing_force_n": dr.pressing_force_n,
+            "normal_force_n": float(load.normal_force_n[0]), "normal_force_factor": 1.0 / math.sin(d.alpha),
+            "friction_coefficient": dr.friction_coefficient, "slip_safety_factor": dr.slip_safety_factor,
+            "output_torque_nm": float(load.output_torque_nm[0]),
+            "input_torque_at_max_position_nm": float(load.input_torque_nm[-1]),
+            "max_contact_pressure_mpa": float(load.max_pressure_mpa.max()),
+            "hertz_valid_up_to_mm": float(valid.max()) if valid.size else None,
+            "adjusting_mechanism": dr.adjusting_mechanism,
+            "adjusting_travel_per_turn_mm": dr.adjusting_travel_per_turn_mm, "adjusting_turns": float(turns[-1]),
+            "ratio_change_per_degree_at_max_position": float(per_degree[-1]),
+            "efficiency": "not modelled: the source gives no efficiency for this drive"}
 
 
 def strength_section(d: HarmonicDesign) -> list[dict[str, Any]]:
@@ -358,6 +500,7 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
         "table": ratio_table(d, a_values),
         "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
         "strength": strength_section(d),
+        "drive": drive_section(d),
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
                        "see prs_geom/harmonic.py",
     }

@@ -81,6 +81,40 @@ def _ratio_table_html(rows: list[dict[str, Any]], k: str) -> str:
         [k + "table." + c if c != "it_grade" else None for c, _ in RATIO_COLUMNS], table_id="ratio-table"))
 
 
+#: The drive table's columns (report.json ``harmonic.table``) and titles.
+DRIVE_COLUMNS = [("a_mm", "a (mm)"), ("adjusting_turns", "adjusting turns"),
+                 ("ratio_change_per_degree", "ratio change per degree of adjusting input"),
+                 ("output_torque_nm", "output torque (N m)"), ("input_torque_nm", "generator torque (N m)"),
+                 ("contact_pressure_mpa", "Hertz pressure (MPa)"),
+                 ("circumferential_semi_axis_mm", "contact semi-axis round (mm)"), ("hertz_valid", "Hertz holds")]
+
+
+def _drive_html(drive: dict[str, Any], rows: list[dict[str, Any]], k: str) -> str:
+    """The drive section: fixed member and signed ratios, pressing and torque, contact
+    pressure and where Hertz holds, the adjusting mechanism; a table along the travel."""
+    valid = drive["hertz_valid_up_to_mm"]
+    text = (f"The {drive['fixed_member'].replace('_', ' ')} is fixed; the {drive['output'].replace('_', ' ')} is "
+            f"the output, ratio {num(drive['ratio_at_min_position'], k + 'drive.ratio_at_min_position')} to "
+            f"{num(drive['ratio_at_max_position'], k + 'drive.ratio_at_max_position')} (negative: it turns against "
+            f"the generator). The pressing device's {num(drive['pressing_force_n'], k + 'drive.pressing_force_n')} "
+            f"press the cone with {num(drive['normal_force_n'], k + 'drive.normal_force_n')} "
+            f"({num(drive['normal_force_factor'], k + 'drive.normal_force_factor')} times, 1 / sin alpha); with "
+            f"friction {num(drive['friction_coefficient'], k + 'drive.friction_coefficient')} and slip safety "
+            f"{num(drive['slip_safety_factor'], k + 'drive.slip_safety_factor')} the output carries "
+            f"{num(drive['output_torque_nm'], k + 'drive.output_torque_nm', unit='N m')}. The arc on the cone "
+            "nearly conforms round the circumference: Hertz's quadratic gap holds while the contact's semi-axis "
+            "there is under a tenth of the contact radius, "
+            + (f"up to a = {num(valid, k + 'drive.hertz_valid_up_to_mm')}" if valid is not None else "nowhere here")
+            + "; beyond, the pressures are an upper estimate and the contact a band. Adjusting: "
+            f"{prose(drive['adjusting_mechanism'])}, {num(drive['adjusting_travel_per_turn_mm'], k + 'drive.adjusting_travel_per_turn_mm')} "
+            f"per turn, {num(drive['adjusting_turns'], k + 'drive.adjusting_turns')} turns over the travel. "
+            f"Efficiency: {prose(drive['efficiency'])}.")
+    return ("<h2 id='drive'>Drive: direction, torque, adjusting</h2><p class='note'>" + text + "</p>"
+            + table([[r[c] for c, _ in DRIVE_COLUMNS] for r in rows], [h for _, h in DRIVE_COLUMNS],
+                    [k + "table." + c if c != "hertz_valid" else None for c, _ in DRIVE_COLUMNS],
+                    table_id="drive-table"))
+
+
 def _strength_html(strength: list[dict[str, Any]], k: str) -> str:
     """The flexspline-strength section: the thin-ring stress rule and one row per material."""
     return ("<h2 id='strength'>Flexspline strength</h2><p class='note'>The generator ovalises the flexspline "
@@ -187,6 +221,7 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
     parts.append("<div class='plots'>" + svg_element(ratio_svg) + "</div>")
     parts.append(_ratio_table_html(rep["table"], k))
     parts.append(_strength_html(rep["strength"], k))
+    parts.append(_drive_html(rep["drive"], rep["table"], k))
     tol_keys = ["max_ratio", "ratio_error", "radius_difference_mm", "radius_tolerance_um", "diameter_band_um",
                 "bore_diameter_mm", None, "ratio_change_per_um"]
     parts.append("<h2 id='tolerance'>Tolerance</h2><p class='note'>Radius error e that keeps the ratio within the "

@@ -245,8 +245,10 @@ PRS_KINDS: dict[str, type] = {"prs": PRSDesign}
 #: first format (version 1, identical keys); a newer version is refused with a message.
 #: Version 2 adds the ``[actuator]`` section. A version-1 file (or one without the key) that
 #: gives ``screw.length_mm`` (then the whole screw) reads as it did, without an actuator
-#: (``actuator.enabled = false``), unless it has the section.
-DESIGN_FORMAT_VERSION = 2
+#: (``actuator.enabled = false``), unless it has the section. Version 3 adds the harmonic
+#: drive's ``[drive]`` section (fixed member, flexspline material, pressing, adjusting); a
+#: version-2 harmonic file reads with its defaults (the published example's arrangement).
+DESIGN_FORMAT_VERSION = 3
 
 
 def check_format_version(value: Any, what: str = "design file") -> int:
