@@ -170,6 +170,13 @@ def test_build_harmonic_writes_exports(tmp_path):
     assert len(blocks) == 3
     arcs = [e for e in blocks[2] if e.dxftype() == "ARC"]
     assert len(arcs) == 1 and arcs[0].dxf.radius == pytest.approx(15.0)
+    # the header holds the drawing's real extents (the three positions stacked up the sheet)
+    from ezdxf import bbox
+
+    ext = bbox.extents(doc.modelspace())
+    np.testing.assert_allclose(doc.header["$EXTMIN"][:2], tuple(ext.extmin)[:2], atol=1e-9)
+    np.testing.assert_allclose(doc.header["$EXTMAX"][:2], tuple(ext.extmax)[:2], atol=1e-9)
+    assert doc.header["$EXTMAX"][1] > 2 * 65.0          # above the second position's ring (outer radius 65)
 
 
 HARMONIC_FIELDS = [

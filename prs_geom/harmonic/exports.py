@@ -125,6 +125,13 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
     msp.add_text(f"{dxf_text(d.name)}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; "
                  "units mm",
                  height=2.0, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, -10.0))
+    # $EXTMIN/$EXTMAX: the real model-space extents (block references included), which CAD
+    # "zoom extents" and viewers read; ezdxf leaves them at their empty-drawing sentinels
+    from ezdxf import bbox
+
+    ext = bbox.extents(msp)
+    msp.dxf.extmin, msp.dxf.extmax = tuple(ext.extmin), tuple(ext.extmax)
+    doc.header["$EXTMIN"], doc.header["$EXTMAX"] = msp.dxf.extmin, msp.dxf.extmax
     save_dxf(doc, path)
 
 
