@@ -186,3 +186,60 @@ def test_adjusting_mechanism_turns_and_resolution():
     assert np.all(per_degree < 0)                        # circular spline fixed: the ratio grows negative
     ff = replace(d, drive=replace(d.drive, fixed_member="flexspline"))
     assert np.all(adjusting(ff, a)[1] > 0)
+
+
+# --------------------------------------------------------------------------- planetary generator
+def test_planetary_stage_against_the_rolling_contacts():
+    """The stage ratio 1 + r_ring r_p / (r_sun r_w) equals the input speed the contact
+    conditions give for a carrier turning once with the ring at rest; the coupled ratio
+    equals them with the ring at the harmonic output speed; with the flexspline fixed the
+    product and the coupled ratio agree; the product is stage x harmonic at every position."""
+    from prs_geom.harmonic.drive import planetary_stage
+
+    i_h = np.array([-19.48, -100.0, -963.6])
+    shift = np.array([0.0, 1.0, 3.2])
+    p = planetary_stage(shift, 10.0, 10.0, 30.0, 8.0, 49.5, i_h)
+    for k in range(3):
+        r_s, r_p = p.sun_radius_mm[k], p.planet_cone_radius_mm[k]
+        w_sun_fixed = _rolling_relative(r_s, r_p, 8.0, 49.5, 0.0)
+        assert p.stage_ratio[k] == pytest.approx(w_sun_fixed, rel=1e-12)
+        w_sun = _rolling_relative(r_s, r_p, 8.0, 49.5, 1.0 / i_h[k])
+        assert p.coupled_ratio[k] == pytest.approx(w_sun * i_h[k], rel=1e-12)
+    np.testing.assert_allclose(p.product_ratio, p.stage_ratio * i_h, rtol=1e-15)
+    ff = planetary_stage(shift, 10.0, 10.0, 30.0, 8.0, 49.5, -i_h + 1.0, "flexspline")
+    np.testing.assert_allclose(ff.coupled_ratio, ff.product_ratio, rtol=1e-15)
+    # the cones trade radius along their common generatrix: the sum stays
+    np.testing.assert_allclose(p.sun_radius_mm + p.planet_cone_radius_mm, 20.0, rtol=1e-15)
+
+
+def _rolling_relative(r_sun, r_planet, r_roller, r_ring, w_ring):
+    """Second path: no slip at both contacts written in the carrier's frame (carrier speed
+    1). The shaft spins at w_p relative to the carrier; at the ring contact the roller's
+    surface (radius r_w) matches the ring's, which moves at (w_ring - 1) r_ring relative to the
+    carrier: w_p r_w = (w_ring - 1) r_ring; at the sun contact (external, opposite surface
+    directions) (w_sun - 1) r_sun = -w_p r_p. Solved as a 2x2 linear system for
+    [w_sun, w_p]."""
+    A = np.array([[0.0, r_roller], [r_sun, r_planet]])
+    b = np.array([(w_ring - 1.0) * r_ring, r_sun])
+    return float(np.linalg.solve(A, b)[0])
+
+
+def test_planetary_design_section_and_ratio_table():
+    from prs_geom.harmonic.model import Generator, generator_stage
+
+    d = replace(HarmonicDesign(), generator=Generator(kind="planetary"))
+    rows = ratio_table(d, [42.0, 60.0, 74.0])
+    p = generator_stage(d, [42.0, 60.0, 74.0])
+    for row, k in zip(rows, range(3)):
+        assert row["total_ratio"] == pytest.approx(row["generator_ratio"] * row["ratio_circular_spline_fixed"],
+                                                   rel=1e-12)
+        assert row["generator_ratio"] == p.stage_ratio[k]
+    # the stage ratio falls as the cone contact moves out on the sun (position grows)
+    assert rows[0]["generator_ratio"] > rows[1]["generator_ratio"] > rows[2]["generator_ratio"] > 1.0
+    assert "generator_ratio" not in ratio_table(HarmonicDesign(), [42.0])[0]
+    with pytest.raises(DesignError) as exc:
+        replace(HarmonicDesign(), generator=Generator(kind="planetary", shift_per_position=1.0))
+    assert exc.value.field == "generator.shift_per_position"
+    with pytest.raises(DesignError) as exc:
+        Generator(kind="cam")
+    assert exc.value.field == "kind"

@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import finest_grade_at_least
 
-__all__ = ["ContactLoad", "contact_load", "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
+__all__ = ["PlanetaryStage", "planetary_stage", "ContactLoad", "contact_load", "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
            "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade"]
 
 #: The member held by the housing: the other one is the output.
@@ -269,3 +269,61 @@ def contact_load(alpha_rad: float, arc_radius_mm: float, neutral_radius_mm: floa
         axes[k] = (a, b) if h.major_in_plane_1 else (b, a)
     valid = axes[:, 1] <= HERTZ_VALID_FRACTION * r_c
     return ContactLoad(normal, torque, torque / np.abs(i), p_max, axes, valid)
+
+
+# --------------------------------------------------------------------------- planetary generator
+@dataclass(frozen=True)
+class PlanetaryStage:
+    """The planetary wave generator's kinematics at each position (arrays over positions).
+
+    Attributes
+    ----------
+    sun_radius_mm, planet_cone_radius_mm : ndarray
+        Contact radii of the input cone disc (the sun) and of the support shaft's cone (the
+        planet) at their common generatrix, mm.
+    stage_ratio : ndarray
+        w_input / w_carrier with the flexspline's inner surface (the ring) at rest:
+        1 + (r_ring r_planet_cone) / (r_sun r_roller).
+    product_ratio : ndarray
+        stage ratio x the harmonic ratio (the source's statement).
+    coupled_ratio : ndarray
+        The same drive with the ring turning at the output speed (Willis with all three
+        members moving): i_h (1 + K) - K, K = stage_ratio - 1.
+    """
+
+    sun_radius_mm: NDArray[np.float64]
+    planet_cone_radius_mm: NDArray[np.float64]
+    stage_ratio: NDArray[np.float64]
+    product_ratio: NDArray[np.float64]
+    coupled_ratio: NDArray[np.float64]
+
+
+def planetary_stage(shift_mm: ArrayLike, sun_radius_mm: float, planet_cone_radius_mm: float,
+                    cone_half_angle_deg: float, roller_radius_mm: float, ring_radius_mm: float,
+                    harmonic_ratio_: ArrayLike, fixed: str = "circular_spline") -> PlanetaryStage:
+    """The planetary wave generator (docs/theory/harmonic.md, "Planetary wave generator").
+
+    Two cone discs keyed to the input (the sun) drive support shafts (the planets) through
+    conical surfaces; each shaft carries a working roller that rolls on the flexspline's inner
+    surface (the ring) and the carrier holding the shafts is the wave. The sun and planet cones
+    touch along a common generatrix of half-angle gamma: when the contact moves axially by s,
+    the sun's radius grows by s tan(gamma) and the planet cone's shrinks by as much (their sum,
+    the shaft's distance from the axis, is fixed). Rolling without slip at both contacts
+    (velocities relative to the carrier) gives, with the ring at rest,
+    w_sun / w_carrier = 1 + (r_ring r_p) / (r_sun r_w). The ring is the flexspline: with the
+    circular spline fixed it turns at the output speed, and Willis' equation with all three
+    members moving gives the drive's ratio i_h (1 + K) - K (``coupled_ratio``; the source's
+    product i_h (1 + K) neglects the ring's slow turn); with the flexspline fixed the two agree.
+    """
+    s = np.asarray(shift_mm, dtype=np.float64)
+    t = math.tan(math.radians(cone_half_angle_deg))
+    r_s = sun_radius_mm + s * t
+    r_p = planet_cone_radius_mm - s * t
+    if np.any(r_s <= 0) or np.any(r_p <= 0):
+        raise DesignError("generator.shift_per_position", float(np.max(np.abs(s))),
+                          "moves the cone contact off the sun disc or the planet cone (a radius reaches 0)")
+    K = (ring_radius_mm * r_p) / (r_s * roller_radius_mm)
+    stage = 1.0 + K
+    i_h = np.asarray(harmonic_ratio_, dtype=np.float64)
+    coupled = i_h * (1.0 + K) - K if _fixed(fixed) == "circular_spline" else stage * i_h
+    return PlanetaryStage(r_s, r_p, stage, stage * i_h, coupled)

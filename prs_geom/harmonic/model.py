@@ -39,16 +39,17 @@ from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
 from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, contact_load, harmonic_ratio,
-                                     strength_limit, tolerance_grade)
+                                     planetary_stage, strength_limit, tolerance_grade)
 from prs_geom.model.validation import check_name, positive, real, size
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import GRADE_NAMES, it_tolerance_by_name_um
 
-__all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive", "ADJUSTING_MECHANISMS",
+__all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive", "Generator", "ADJUSTING_MECHANISMS",
            "HARMONIC_FIELD_COMMENTS",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
-           "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section"]
+           "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section",
+           "generator_stage"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -178,6 +179,42 @@ class Drive:
                            positive("adjusting_travel_per_turn_mm", self.adjusting_travel_per_turn_mm))
 
 
+@dataclass(frozen=True)
+class Generator:
+    """The wave generator (design section ``[generator]``, format 3).
+
+    ``kind`` ``"elliptical"`` (the published example: an elliptical disc on the input, the
+    generator turns with it) or ``"planetary"`` (cone discs on the input drive support shafts
+    whose rollers roll on the flexspline; the carrier is the wave:
+    :func:`prs_geom.harmonic.drive.planetary_stage`). The planetary one's cone contact: the sun
+    disc's radius ``sun_radius_mm`` and the shaft cone's ``planet_cone_radius_mm`` at
+    positions.min_mm, their common half-angle ``cone_half_angle_deg``, the working roller's
+    radius ``roller_radius_mm``, and ``shift_per_position`` (mm of axial shift of the cone
+    contact per mm of position a: how the pressing cone discs follow the adjustment).
+    """
+
+    kind: str = "elliptical"
+    sun_radius_mm: float = 10.0
+    planet_cone_radius_mm: float = 10.0
+    cone_half_angle_deg: float = 30.0
+    roller_radius_mm: float = 8.0
+    shift_per_position: float = 0.1
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("elliptical", "planetary"):
+            raise DesignError("kind", self.kind, 'must be "elliptical" or "planetary"')
+        for f in ("sun_radius_mm", "planet_cone_radius_mm", "roller_radius_mm"):
+            object.__setattr__(self, f, size(f, getattr(self, f)))
+        ang = real("cone_half_angle_deg", self.cone_half_angle_deg)
+        if not 5.0 <= ang <= 60.0:
+            raise DesignError("cone_half_angle_deg", ang, "must be from 5 to 60 degrees")
+        object.__setattr__(self, "cone_half_angle_deg", ang)
+        k = real("shift_per_position", self.shift_per_position)
+        if not 0.0 <= k <= 1.0:
+            raise DesignError("shift_per_position", k, "must be from 0 to 1 (mm per mm of position a)")
+        object.__setattr__(self, "shift_per_position", k)
+
+
 #: Comments written above each key of a harmonic design file (unit and meaning).
 HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "kind": '"prs" (default) or "harmonic"',
@@ -200,6 +237,12 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "drive.slip_safety_factor": "transmissible torque divided by this (>= 1)",
     "drive.adjusting_mechanism": '"screw", "ball-screw", "worm", "rack" or "gears"',
     "drive.adjusting_travel_per_turn_mm": "axial travel of the circular spline per adjusting-input turn (mm)",
+    "generator.kind": '"elliptical" (disc, turns with the input) or "planetary" (cone discs, carrier = wave)',
+    "generator.sun_radius_mm": "planetary: input cone disc radius at the cone contact, at positions.min_mm (mm)",
+    "generator.planet_cone_radius_mm": "planetary: support-shaft cone radius at that contact (mm)",
+    "generator.cone_half_angle_deg": "planetary: half-angle of the two cones' common generatrix (degrees)",
+    "generator.roller_radius_mm": "planetary: working roller radius, rolling on the flexspline (mm)",
+    "generator.shift_per_position": "planetary: axial shift of the cone contact per mm of position a",
 }
 
 
@@ -229,6 +272,7 @@ class HarmonicDesign:
     positions: Positions = field(default_factory=Positions)
     mesh: HarmonicMesh = field(default_factory=HarmonicMesh)
     drive: Drive = field(default_factory=Drive)
+    generator: Generator = field(default_factory=Generator)
 
     def __post_init__(self) -> None:
         check_name(self.name)
@@ -248,6 +292,13 @@ class HarmonicDesign:
                               f"must be below the infinite-ratio position {a_inf:.6f} mm (radius difference reaches 0)")
         if float(np.min(radius_difference(self, np.linspace(self.positions.min_mm, self.positions.max_mm, 201)))) <= 0:
             raise DesignError("positions.min_mm", self.positions.min_mm, "the radius difference must stay positive")
+        if self.generator.kind == "planetary":
+            g = self.generator
+            travel = g.shift_per_position * (self.positions.max_mm - self.positions.min_mm)
+            if travel * math.tan(math.radians(g.cone_half_angle_deg)) >= g.planet_cone_radius_mm:
+                raise DesignError("generator.shift_per_position", g.shift_per_position,
+                                  f"moves the cone contact {travel:.3f} mm over the travel: the planet cone's radius "
+                                  f"{g.planet_cone_radius_mm:g} mm would reach 0")
 
     @property
     def alpha(self) -> float:
@@ -372,6 +423,11 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
     grades = tolerance_grade(delta, 2.0 * st["contact_radius_mm"])
     load = drive_load(d, st)
     turns, per_degree = adjusting(d, st["a_mm"])
+    planet = [{} for _ in range(len(st["a_mm"]))]
+    if d.generator.kind == "planetary":
+        p = generator_stage(d, st["a_mm"])
+        planet = [{"generator_ratio": float(p.stage_ratio[k]), "total_ratio": float(p.product_ratio[k]),
+                   "total_ratio_coupled": float(p.coupled_ratio[k])} for k in range(len(st["a_mm"]))]
     return [{"a_mm": float(st["a_mm"][k]), "beta_deg": float(np.degrees(st["beta_rad"][k])),
              "phi_deg": float(np.degrees(st["phi_rad"][k])),
              "contact_radius_mm": float(st["contact_radius_mm"][k]),
@@ -385,7 +441,19 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
              "output_torque_nm": float(load.output_torque_nm[k]), "input_torque_nm": float(load.input_torque_nm[k]),
              "contact_pressure_mpa": float(load.max_pressure_mpa[k]),
              "circumferential_semi_axis_mm": float(load.semi_axes_mm[k, 1]),
-             "hertz_valid": bool(load.hertz_valid[k])} for k in range(len(st["a_mm"]))]
+             "hertz_valid": bool(load.hertz_valid[k]), **planet[k]} for k in range(len(st["a_mm"]))]
+
+
+def generator_stage(d: HarmonicDesign, a: ArrayLike):
+    """The planetary wave generator's stage and the drive's total ratio at positions a (mm)
+    (:func:`prs_geom.harmonic.drive.planetary_stage`; the ring is the flexspline's inner
+    surface, radius r0 - t / 2)."""
+    g = d.generator
+    a = np.asarray(a, dtype=np.float64)
+    f = d.flexspline
+    return planetary_stage(g.shift_per_position * (a - d.positions.min_mm), g.sun_radius_mm,
+                           g.planet_cone_radius_mm, g.cone_half_angle_deg, g.roller_radius_mm,
+                           f.neutral_radius_mm - 0.5 * f.wall_thickness_mm, design_ratio(d, a), d.drive.fixed_member)
 
 
 def design_ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:

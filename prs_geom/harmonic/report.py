@@ -89,6 +89,11 @@ DRIVE_COLUMNS = [("a_mm", "a (mm)"), ("adjusting_turns", "adjusting turns"),
                  ("circumferential_semi_axis_mm", "contact semi-axis round (mm)"), ("hertz_valid", "Hertz holds")]
 
 
+#: Columns the drive table adds for a planetary wave generator.
+PLANETARY_COLUMNS = [("generator_ratio", "generator stage ratio"), ("total_ratio", "total ratio (product)"),
+                     ("total_ratio_coupled", "total ratio (flexspline turning)")]
+
+
 def _drive_html(drive: dict[str, Any], rows: list[dict[str, Any]], k: str) -> str:
     """The drive section: fixed member and signed ratios, pressing and torque, contact
     pressure and where Hertz holds, the adjusting mechanism; a table along the travel."""
@@ -109,9 +114,10 @@ def _drive_html(drive: dict[str, Any], rows: list[dict[str, Any]], k: str) -> st
             f"{prose(drive['adjusting_mechanism'])}, {num(drive['adjusting_travel_per_turn_mm'], k + 'drive.adjusting_travel_per_turn_mm')} "
             f"per turn, {num(drive['adjusting_turns'], k + 'drive.adjusting_turns')} turns over the travel. "
             f"Efficiency: {prose(drive['efficiency'])}.")
+    cols = DRIVE_COLUMNS + (PLANETARY_COLUMNS if rows and "generator_ratio" in rows[0] else [])
     return ("<h2 id='drive'>Drive: direction, torque, adjusting</h2><p class='note'>" + text + "</p>"
-            + table([[r[c] for c, _ in DRIVE_COLUMNS] for r in rows], [h for _, h in DRIVE_COLUMNS],
-                    [k + "table." + c if c != "hertz_valid" else None for c, _ in DRIVE_COLUMNS],
+            + table([[r[c] for c, _ in cols] for r in rows], [h for _, h in cols],
+                    [k + "table." + c if c != "hertz_valid" else None for c, _ in cols],
                     table_id="drive-table"))
 
 

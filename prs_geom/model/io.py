@@ -246,8 +246,9 @@ PRS_KINDS: dict[str, type] = {"prs": PRSDesign}
 #: Version 2 adds the ``[actuator]`` section. A version-1 file (or one without the key) that
 #: gives ``screw.length_mm`` (then the whole screw) reads as it did, without an actuator
 #: (``actuator.enabled = false``), unless it has the section. Version 3 adds the harmonic
-#: drive's ``[drive]`` section (fixed member, flexspline material, pressing, adjusting); a
-#: version-2 harmonic file reads with its defaults (the published example's arrangement).
+#: drive's ``[drive]`` and ``[generator]`` sections (fixed member, flexspline material, pressing,
+#: adjusting; the wave generator); a version-2 harmonic file reads with their defaults (the
+#: published example's arrangement).
 DESIGN_FORMAT_VERSION = 3
 
 
