@@ -715,7 +715,8 @@ def harmonic_stage(ctx: BuildContext) -> None:
     """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
     from prs_geom.exports.meshes import stl_header, write_stl
     from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
-                                           flexspline_profile, plot_ratio, ratio_table_csv, revolve_deviation,
+                                           flexspline_profile, plot_drive, plot_ratio, ratio_table_csv,
+                                           revolve_deviation,
                                            write_dxf)
     from prs_geom.harmonic.model import harmonic_report, ratio_table, strength_warnings
 
@@ -724,6 +725,7 @@ def harmonic_stage(ctx: BuildContext) -> None:
     ctx.results.warnings += strength_warnings(d)
     ctx.write_text("ratio_table.csv", ratio_table_csv(ratio_table(d)))
     ctx.results.files += plot_ratio(d, ctx.out)
+    ctx.results.files += plot_drive(d, ctx.out)
     write_dxf(d, ctx.add_file("axial_sections.dxf"))
     rows = []
     tol = d.mesh.chord_tolerance_mm

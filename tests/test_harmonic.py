@@ -150,8 +150,8 @@ def test_harmonic_cli(tmp_path):
 def test_build_harmonic_writes_exports(tmp_path):
     out = tmp_path / "h"
     report = build(load_design(EXAMPLES / "harmonic.toml"), out)
-    for f in ("ratio.png", "ratio.svg", "ratio_table.csv", "axial_sections.dxf", "circular_spline.stl",
-              "flexspline.stl", "report.json", "design.toml"):
+    for f in ("ratio.png", "ratio.svg", "drive.png", "drive.svg", "ratio_table.csv", "axial_sections.dxf",
+              "circular_spline.stl", "flexspline.stl", "report.json", "design.toml"):
         assert (out / f).is_file(), f
     rows = (out / "ratio_table.csv").read_text().splitlines()
     assert rows[0].startswith("a_mm,beta_deg")
@@ -431,6 +431,11 @@ def _table_titles(page: str, table_id: str) -> list[list[str]]:
 def test_report_html_holds_the_ratio_table_at_full_precision_and_is_self_contained(placed):
     d, out, report = placed
     page = (out / "report.html").read_text(encoding="utf-8")
+    # issue 35: the arrangement sketch, the stress and torque curves, the strength and drive tables
+    assert page.count("<svg") >= 2 and "arrangement, strength and torque" in page
+    assert "circular spline fixed (hatched), flexspline output" in page
+    for table_id in ("strength-table", "drive-table"):
+        assert f"<table id='{table_id}'>" in page
     ref = harmonic_report(d)
     keys = ["a_mm", "beta_deg", "phi_deg", "contact_radius_mm", "cone_radius_mm", "radius_difference_mm", "ratio",
             "ratio_circular_spline_fixed", "ratio_flexspline_fixed"]
@@ -450,7 +455,7 @@ def test_report_html_holds_the_ratio_table_at_full_precision_and_is_self_contain
     assert design_hash(d) in page and __version__ in page
     assert not re.search(r"""(src|href)\s*=\s*["'](https?:|//|/|\.\.?/)""", page)
     assert "<link" not in page and "@import" not in page and "<script src" not in page
-    assert page.count("<svg") == 1 and "scene-data" in page and "<canvas id='view'" in page
+    assert page.count("<svg") == 2 and "scene-data" in page and "<canvas id='view'" in page
     scene = json.loads(re.search(r"<script type='application/json' id='scene-data'>(.*?)</script>", page,
                                  re.S).group(1).replace("<\\/", "</"))
     assert [i["name"] for i in scene["instances"]] == ["circular_spline", "flexspline", "wave_generator"]

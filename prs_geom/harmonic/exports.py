@@ -46,7 +46,7 @@ from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_pr
                                         flexspline_mesh, flexspline_profile, revolution_sections)
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
 
-__all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "write_dxf", "ASSEMBLY_MATERIALS",
+__all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "plot_drive", "write_dxf", "ASSEMBLY_MATERIALS",
            "assembly_scene", "display_colours", "HarmonicPlacement", "place_harmonic",
            "write_harmonic_html"]
 
@@ -87,6 +87,91 @@ def plot_ratio(d: HarmonicDesign, out: Path) -> list[str]:
     ax[1].grid(alpha=0.3)
     fig.suptitle(f"{mpl_text(d.name)}: stepless harmonic friction drive")
     return save_figure(fig, out, "ratio")
+
+
+def plot_drive(d: HarmonicDesign, out: Path) -> list[str]:
+    """``drive.png/.svg``: the arrangement sketch (the axial half-section at the last drawing
+    position, drawn from the model: the tilted flexspline generatrix with its contact arc, the
+    conical bore, the wave generator, which member is fixed and which is the output), the
+    flexspline's wall bending stress against each reference material's allowed stress, and the
+    torque capacity and Hertz pressure over the travel."""
+    from prs_geom.exports.plots import plt, save_figure
+    from prs_geom.harmonic.drive import FLEXSPLINE_MATERIALS, flexspline_bending_stress
+    from prs_geom.harmonic.model import drive_load, radius_difference
+
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.6))
+    _sketch(d, ax[0])
+    a = np.linspace(d.positions.min_mm, d.positions.max_mm, 200)
+    f = d.flexspline
+    for k, (key, mat) in enumerate(FLEXSPLINE_MATERIALS.items()):
+        sigma = flexspline_bending_stress(radius_difference(d, a), f.neutral_radius_mm, f.wall_thickness_mm,
+                                          mat.youngs_modulus_mpa)
+        ax[1].semilogy(a, sigma, color=f"C{k}", label=f"{key}: wall stress")
+        ax[1].axhline(mat.allowed_bending_stress_mpa, color=f"C{k}", ls="--", label=f"{key}: allowed")
+    ax[1].set_xlabel("position a (mm)")
+    ax[1].set_ylabel("flexspline bending stress (MPa)")
+    ax[1].set_title(f"wall {f.wall_thickness_mm:g} mm, sigma = 3 E t Delta / (2 r0^2)", fontsize=9)
+    ax[1].grid(alpha=0.3, which="both")
+    ax[1].legend(fontsize=7)
+    st = contact_state(d, a)
+    load = drive_load(d, st)
+    ax[2].plot(a, load.output_torque_nm, color="C0", label="output torque (N m)")
+    ax[2].set_xlabel("position a (mm)")
+    ax[2].set_ylabel("output torque (N m)")
+    ax[2].set_ylim(0.0, 1.2 * float(load.output_torque_nm.max()))
+    p = ax[2].twinx()
+    p.plot(a, load.max_pressure_mpa, color="C3", label="Hertz pressure (MPa)")
+    p.plot(a[~load.hertz_valid], load.max_pressure_mpa[~load.hertz_valid], color="C3", lw=3, alpha=0.4,
+           label="Hertz not valid (upper estimate)")
+    p.set_ylabel("Hertz pressure (MPa)")
+    ax[2].set_title(f"pressing {d.drive.pressing_force_n:g} N, mu {d.drive.friction_coefficient:g}, "
+                    f"S {d.drive.slip_safety_factor:g}", fontsize=9)
+    ax[2].grid(alpha=0.3)
+    h1, l1 = ax[2].get_legend_handles_labels()
+    h2, l2 = p.get_legend_handles_labels()
+    ax[2].legend(h1 + h2, l1 + l2, fontsize=7, loc="center left")
+    fig.suptitle(f"{mpl_text(d.name)}: arrangement, strength and torque")
+    fig.tight_layout()
+    return save_figure(fig, out, "drive")
+
+
+def _sketch(d: HarmonicDesign, ax: Any) -> None:
+    """The arrangement sketch on ``ax``: axial half-section, x along the axis from the
+    flexspline bottom, r up (mm)."""
+    f, c = d.flexspline, d.circular_spline
+    a = d.positions.drawing_mm[-1]
+    beta = float(tilt_angle(d, a))
+    L, r0 = f.length_mm, f.neutral_radius_mm
+    # flexspline: bottom diaphragm and the generatrix tilted by beta about A = (0, r0)
+    end = (L * math.cos(beta), r0 + L * math.sin(beta))
+    ax.plot([0.0, 0.0], [0.0, r0], color="C0", lw=2)
+    ax.plot([0.0, end[0]], [r0, end[1]], color="C0", lw=2, label="flexspline")
+    cx, cr = contact_point(d, a)
+    centre = (d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta),
+              r0 + d.x_s * math.sin(beta) - f.arc_centre_offset_mm * math.cos(beta))
+    # the contact arc around its contact point, which lies at 90 deg + alpha from the centre
+    psi = 0.5 * math.pi + d.alpha + np.radians(np.linspace(-60.0, 60.0, 41))
+    ax.plot(centre[0] + f.arc_radius_mm * np.cos(psi), centre[1] + f.arc_radius_mm * np.sin(psi), color="C0", lw=2)
+    # circular spline: the ring with its conical bore, small end at x = a
+    ring = np.array([[a, c.bore_small_radius_mm], [a, c.outer_radius_mm], [a + c.bore_length_mm, c.outer_radius_mm],
+                     [a + c.bore_length_mm, c.bore_large_radius_mm], [a, c.bore_small_radius_mm]])
+    fixed = d.drive.fixed_member
+    ax.fill(ring[:, 0], ring[:, 1], facecolor="0.85" if fixed == "circular_spline" else "none",
+            edgecolor="C1", hatch="///" if fixed == "circular_spline" else None, lw=1.5, label="circular spline")
+    # wave generator inside the open end
+    gx = end[0] - 0.5 * f.arc_radius_mm
+    ax.fill([gx - 6.0, gx + 6.0, gx + 6.0, gx - 6.0], [0.0, 0.0, r0 - 2.0, r0 - 2.0], facecolor="C2", alpha=0.25,
+            edgecolor="C2", label="wave generator (input)")
+    ax.plot([cx], [cr], "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
+    out = "flexspline" if fixed == "circular_spline" else "circular spline"
+    ax.set_title(f"{fixed.replace('_', ' ')} fixed (hatched), {out} output; cone {math.degrees(d.alpha):.3f} deg",
+                 fontsize=9)
+    ax.set_xlabel("x from the flexspline bottom (mm)")
+    ax.set_ylabel("r (mm)")
+    ax.set_aspect("equal")
+    ax.set_xlim(-5.0, a + c.bore_length_mm + 5.0)
+    ax.set_ylim(0.0, c.outer_radius_mm + 10.0)
+    ax.legend(fontsize=7, loc="lower left")
 
 
 def write_dxf(d: HarmonicDesign, path: Path) -> None:
@@ -224,14 +309,18 @@ def write_harmonic_html(design: HarmonicDesign, out_dir: Path, report: dict[str,
     from prs_geom.harmonic.report import DISPLAY_TOLERANCE_MM, write_report_html
 
     out = Path(out_dir)
-    svg = out / "ratio.svg"
-    if svg.is_file():
-        svg_text = svg.read_text(encoding="utf-8")
-    else:
-        with tempfile.TemporaryDirectory() as tmp:
-            plot_ratio(design, Path(tmp))
-            svg_text = (Path(tmp) / "ratio.svg").read_text(encoding="utf-8")
+    texts = []
+    for stem, plot in (("ratio", plot_ratio), ("drive", plot_drive)):
+        svg = out / f"{stem}.svg"
+        if svg.is_file():
+            texts.append(svg.read_text(encoding="utf-8"))
+        else:
+            with tempfile.TemporaryDirectory() as tmp:
+                plot(design, Path(tmp))
+                texts.append((Path(tmp) / f"{stem}.svg").read_text(encoding="utf-8"))
+    svg_text = texts[0]
     asm = placement.assembly_model
     view = build_assembly(design, asm.position_mm, max(DISPLAY_TOLERANCE_MM, asm.tolerance_mm))
-    write_report_html(out / "report.html", design, report, view, display_colours(), svg_text, date, version)
+    write_report_html(out / "report.html", design, report, view, display_colours(), svg_text, date, version,
+                      drive_svg=texts[1])
     return "report.html"

@@ -70,6 +70,25 @@ STRENGTH_COLUMNS = [("name", "flexspline material"), ("youngs_modulus_mpa", "E (
                     ("speed_range", "usable speed range"), ("within", "design within")]
 
 
+def _placement_html(asm: dict[str, Any]) -> str:
+    """The placed assembly's position and wave generator (report.json ``assembly``)."""
+    wg = asm["wave_generator"]
+    k, kw = "assembly.", "assembly.wave_generator."
+    return (table([
+        ["position a (mm)", Q(asm["position_mm"], k + "position_mm")], ["position rule", asm["position_rule"]],
+        ["tilt beta on the major axis (°)", Q(asm["beta_deg"], k + "beta_deg")],
+        ["radial wave amplitude at the open end (mm)", Q(asm["wave_amplitude_mm"], k + "wave_amplitude_mm")],
+        ["ratio i", Q(asm["ratio"], k + "ratio")],
+        ["radius difference Delta (mm)", Q(asm["radius_difference_mm"], k + "radius_difference_mm")],
+        ["wave generator semi-axis x (mm)", Q(wg["semi_axis_x_mm"], kw + "semi_axis_x_mm")],
+        ["wave generator semi-axis y (mm)", Q(wg["semi_axis_y_mm"], kw + "semi_axis_y_mm")],
+        ["wave generator band z (mm)", Raw(f"{num(wg['z_min_mm'], kw + 'z_min_mm', with_unit=False)} to "
+                                           f"{num(wg['z_max_mm'], kw + 'z_max_mm', with_unit=False)}")],
+        ["triangles (export meshes)", asm["triangles"]],
+    ], ["placed assembly", "value"], table_id="placement")
+        + f"<p class='note'>Flexspline: {prose(asm['deformation'])}. Wave generator: {prose(wg['rule'])}.</p>")
+
+
 def _ratio_table_html(rows: list[dict[str, Any]], k: str) -> str:
     """The ratio table: the contact state, the signed ratios and the ISO grade per position."""
     return ("<h3 id='ratio-table-title'>Ratio table</h3><p class='note'>Signed ratios: generator speed over "
@@ -174,7 +193,7 @@ def _checks_html(report: dict[str, Any]) -> str:
 
 
 def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any], view: HarmonicAssembly,
-                      colours: dict[str, str], ratio_svg: str, date: str, version: str) -> None:
+                      colours: dict[str, str], ratio_svg: str, date: str, version: str, drive_svg: str = "") -> None:
     """Write ``report.html``.
 
     Parameters
@@ -191,6 +210,9 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
         Part -> ``#rrggbb`` display colour.
     ratio_svg : str
         Text of the ratio plot's SVG file.
+    drive_svg : str
+        Text of the drive plot's SVG file (the arrangement sketch, stress and torque curves;
+        empty: left out).
     date, version : str
         Build date and prs_geom version (provenance).
     """
@@ -201,22 +223,7 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
                       "Units mm, degrees; axial positions from the flexspline bottom; x along the wave "
                       "generator's major axis.", warnings, "cut the circular spline and the flexspline open")
     if asm:
-        wg = asm["wave_generator"]
-        k, kw = "assembly.", "assembly.wave_generator."
-        parts.append(table([
-            ["position a (mm)", Q(asm["position_mm"], k + "position_mm")], ["position rule", asm["position_rule"]],
-            ["tilt beta on the major axis (°)", Q(asm["beta_deg"], k + "beta_deg")],
-            ["radial wave amplitude at the open end (mm)", Q(asm["wave_amplitude_mm"], k + "wave_amplitude_mm")],
-            ["ratio i", Q(asm["ratio"], k + "ratio")],
-            ["radius difference Delta (mm)", Q(asm["radius_difference_mm"], k + "radius_difference_mm")],
-            ["wave generator semi-axis x (mm)", Q(wg["semi_axis_x_mm"], kw + "semi_axis_x_mm")],
-            ["wave generator semi-axis y (mm)", Q(wg["semi_axis_y_mm"], kw + "semi_axis_y_mm")],
-            ["wave generator band z (mm)", Raw(f"{num(wg['z_min_mm'], kw + 'z_min_mm', with_unit=False)} to "
-                                               f"{num(wg['z_max_mm'], kw + 'z_max_mm', with_unit=False)}")],
-            ["triangles (export meshes)", asm["triangles"]],
-        ], ["placed assembly", "value"], table_id="placement"))
-        parts.append(f"<p class='note'>Flexspline: {prose(asm['deformation'])}. Wave generator: "
-                     f"{prose(wg['rule'])}.</p>")
+        parts.append(_placement_html(asm))
     k = "harmonic."
     parts.append("<h2 id='ratio'>Ratio</h2>" + table([
         ["cone half-angle alpha (°)", Q(rep["alpha_deg"], k + "alpha_deg")], ["a0 (mm)", Q(rep["a0_mm"], k + "a0_mm")],
@@ -228,6 +235,8 @@ def write_report_html(path: Path, design: HarmonicDesign, report: dict[str, Any]
     parts.append(_ratio_table_html(rep["table"], k))
     parts.append(_strength_html(rep["strength"], k))
     parts.append(_drive_html(rep["drive"], rep["table"], k))
+    if drive_svg:
+        parts.append("<div class='plots'>" + svg_element(drive_svg) + "</div>")
     tol_keys = ["max_ratio", "ratio_error", "radius_difference_mm", "radius_tolerance_um", "diameter_band_um",
                 "bore_diameter_mm", None, "ratio_change_per_um"]
     parts.append("<h2 id='tolerance'>Tolerance</h2><p class='note'>Radius error e that keeps the ratio within the "
