@@ -570,5 +570,7 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
         "strength": strength_section(d),
         "drive": drive_section(d),
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
-                       "see prs_geom/harmonic.py",
+                       "radial inner-wave drive with the conical bore in the circular spline (the outer-wave, "
+                       "end-face and sealed arrangements and multi-stage drives are not modelled yet); "
+                       "see prs_geom/harmonic/model.py and docs/theory/harmonic.md",
     }
