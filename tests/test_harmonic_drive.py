@@ -243,3 +243,24 @@ def test_planetary_design_section_and_ratio_table():
     with pytest.raises(DesignError) as exc:
         Generator(kind="cam")
     assert exc.value.field == "kind"
+
+
+def test_stages_in_series_multiply():
+    """Multi-stage drives as stages in series: each stage's output turns the next one's
+    generator, so two identical stages with the circular spline fixed turn the last output
+    with the input (-i)^2 > 0, three against it; the ratio table carries it."""
+    from prs_geom.harmonic.model import stages_in_series
+
+    i = np.array([-19.48, -963.6])
+    np.testing.assert_allclose(stages_in_series(i, 2), i * i, rtol=1e-15)
+    np.testing.assert_allclose(stages_in_series(i, 3), i * i * i, rtol=1e-15)
+    d = HarmonicDesign()
+    two = replace(d, drive=replace(d.drive, stages=2))
+    row1, row2 = ratio_table(d, [73.5])[0], ratio_table(two, [73.5])[0]
+    assert row1["ratio_all_stages"] == row1["ratio_circular_spline_fixed"]
+    assert row2["ratio_all_stages"] == pytest.approx(row1["ratio_circular_spline_fixed"] ** 2, rel=1e-15)
+    assert row2["ratio_all_stages"] > 9e5                       # 963.6^2, turning with the input
+    from prs_geom.harmonic.model import Drive
+    with pytest.raises(DesignError) as exc:
+        Drive(stages=5)
+    assert exc.value.field == "stages"

@@ -49,7 +49,7 @@ __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
            "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section",
-           "generator_stage"]
+           "generator_stage", "stages_in_series"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -147,6 +147,9 @@ class Drive:
     adjusting_travel_per_turn_mm : float
         Axial travel of the circular spline per turn of the adjusting input, mm (a screw's
         lead; a worm or gear train divides it by its ratio).
+    stages : int
+        Identical stages in series, adjusted together (1 to 4): the total ratio is the stage
+        ratio to that power (each stage's output drives the next one's generator).
     """
 
     fixed_member: str = "circular_spline"
@@ -156,6 +159,7 @@ class Drive:
     slip_safety_factor: float = 1.5
     adjusting_mechanism: str = "screw"
     adjusting_travel_per_turn_mm: float = 1.0
+    stages: int = 1
 
     def __post_init__(self) -> None:
         if self.fixed_member not in FIXED_MEMBERS:
@@ -177,6 +181,8 @@ class Drive:
         object.__setattr__(self, "slip_safety_factor", sf)
         object.__setattr__(self, "adjusting_travel_per_turn_mm",
                            positive("adjusting_travel_per_turn_mm", self.adjusting_travel_per_turn_mm))
+        if isinstance(self.stages, bool) or not isinstance(self.stages, int) or not 1 <= self.stages <= 4:
+            raise DesignError("stages", self.stages, "must be a whole number of stages from 1 to 4")
 
 
 @dataclass(frozen=True)
@@ -237,6 +243,7 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "drive.slip_safety_factor": "transmissible torque divided by this (>= 1)",
     "drive.adjusting_mechanism": '"screw", "ball-screw", "worm", "rack" or "gears"',
     "drive.adjusting_travel_per_turn_mm": "axial travel of the circular spline per adjusting-input turn (mm)",
+    "drive.stages": "identical stages in series, adjusted together (1 to 4)",
     "generator.kind": '"elliptical" (disc, turns with the input) or "planetary" (cone discs, carrier = wave)',
     "generator.sun_radius_mm": "planetary: input cone disc radius at the cone contact, at positions.min_mm (mm)",
     "generator.planet_cone_radius_mm": "planetary: support-shaft cone radius at that contact (mm)",
@@ -421,6 +428,7 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
     delta = st["radius_difference_mm"]
     signed = {m: harmonic_ratio(r0, r0 + delta, m) for m in FIXED_MEMBERS}
     grades = tolerance_grade(delta, 2.0 * st["contact_radius_mm"])
+    staged = stages_in_series(signed[d.drive.fixed_member], d.drive.stages)
     load = drive_load(d, st)
     turns, per_degree = adjusting(d, st["a_mm"])
     planet = [{} for _ in range(len(st["a_mm"]))]
@@ -436,6 +444,7 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
              "ratio": float(st["ratio"][k]),
              "ratio_circular_spline_fixed": float(signed["circular_spline"][k]),
              "ratio_flexspline_fixed": float(signed["flexspline"][k]),
+             "ratio_all_stages": float(staged[k]),
              "it_grade": grades[k],
              "adjusting_turns": float(turns[k]), "ratio_change_per_degree": float(per_degree[k]),
              "output_torque_nm": float(load.output_torque_nm[k]), "input_torque_nm": float(load.input_torque_nm[k]),
@@ -454,6 +463,12 @@ def generator_stage(d: HarmonicDesign, a: ArrayLike):
     return planetary_stage(g.shift_per_position * (a - d.positions.min_mm), g.sun_radius_mm,
                            g.planet_cone_radius_mm, g.cone_half_angle_deg, g.roller_radius_mm,
                            f.neutral_radius_mm - 0.5 * f.wall_thickness_mm, design_ratio(d, a), d.drive.fixed_member)
+
+
+def stages_in_series(stage_ratio: ArrayLike, stages: int) -> NDArray[np.float64]:
+    """The ratio of ``stages`` identical stages in series: each stage's output turns the next
+    one's wave generator, so the ratios (signs included) multiply: i^stages."""
+    return np.asarray(stage_ratio, dtype=np.float64) ** int(stages)
 
 
 def design_ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
@@ -571,6 +586,7 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
         "drive": drive_section(d),
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
                        "radial inner-wave drive with the conical bore in the circular spline (the outer-wave, "
-                       "end-face and sealed arrangements and multi-stage drives are not modelled yet); "
+                       "end-face and sealed arrangements are not modelled yet; multi-stage drives as identical "
+                       "stages in series); "
                        "see prs_geom/harmonic/model.py and docs/theory/harmonic.md",
     }

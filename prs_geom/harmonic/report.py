@@ -101,7 +101,7 @@ def _ratio_table_html(rows: list[dict[str, Any]], k: str) -> str:
 
 
 #: The drive table's columns (report.json ``harmonic.table``) and titles.
-DRIVE_COLUMNS = [("a_mm", "a (mm)"), ("adjusting_turns", "adjusting turns"),
+DRIVE_COLUMNS = [("a_mm", "a (mm)"), ("ratio_all_stages", "ratio, all stages"), ("adjusting_turns", "adjusting turns"),
                  ("ratio_change_per_degree", "ratio change per degree of adjusting input"),
                  ("output_torque_nm", "output torque (N m)"), ("input_torque_nm", "generator torque (N m)"),
                  ("contact_pressure_mpa", "Hertz pressure (MPa)"),
