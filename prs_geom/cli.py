@@ -401,12 +401,7 @@ def cmd_loads(args: argparse.Namespace) -> int:
 
     models = _load_models(design, progress=progress)
     rep = loads_section(load_distribution(design, models.model, progress), models.cache_report)
-    risk = None
-    if models.compare:
-        from prs_geom.analysis.loads import model_risk
-
-        opts = models.risk_options
-        risk = model_risk(design, opts.pop("compare"), **opts)
+    risk = models.model_risk(design)
     if args.json:
         if risk is not None:
             from prs_geom.exports.report import model_risk_section

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from prs_geom._version import __version__
 from prs_geom.analysis.contact import ContactResult, analyse_contact
 from prs_geom.analysis.load_solver import LoadModel
-from prs_geom.analysis.loads import LoadsResult, analyse_loads, build_model
+from prs_geom.analysis.loads import LoadsResult, ModelRisk, analyse_loads, build_model
 from prs_geom.analysis.loads import design_pitch as _design_pitch
 from prs_geom.exports.output import AtomicOutputDir
 from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, PitchLists,
@@ -116,6 +116,16 @@ class LoadModels:
     alternative_cache: "CachedInfluence | None" = None
     designed_with: tuple[str, ...] = ()
     descriptions: dict[str, str] = field(default_factory=dict)
+
+    def model_risk(self, design: PRSDesign) -> ModelRisk | None:
+        """The model-risk study of ``design`` under these models
+        (:func:`prs_geom.analysis.loads.model_risk`), or None for the analytic model alone."""
+        if not self.compare:
+            return None
+        from prs_geom.analysis.loads import model_risk
+
+        return model_risk(design, self.compare, designed_with=self.designed_with or None,
+                          descriptions=self.descriptions)
 
     @property
     def risk_options(self) -> dict[str, Any]:

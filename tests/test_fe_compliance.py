@@ -22,7 +22,7 @@ from prs_geom.analysis.contact import analyse_contact
 from prs_geom.analysis.fe import CONVERGED_LEVEL, influence_matrices
 from prs_geom.analysis.fe.compliance import (ALTERNATIVES, FeVariant, body_scale, fe_load_model, pair_compliance,
                                              pair_matrix)
-from prs_geom.analysis.loads import (build_model, design_pitches, forward, model_risk, off_design,
+from prs_geom.analysis.loads import (build_model, design_pitches, forward, off_design,
                                      with_pitch_lists)
 from prs_geom.model.design import default_design
 from prs_geom.model.io import load_design
@@ -134,8 +134,7 @@ def test_model_risk_cases_are_the_forward_solves(models_tc):
     """Every case of the study is the forward solve of its lists under its model; the
     diagonal entries (lists designed with a model, evaluated with it) share equally."""
     d = _fe(default_design())
-    opts = models_tc.risk_options
-    risk = model_risk(d, opts.pop("compare"), **opts)
+    risk = models_tc.model_risk(d)
     assert risk.models == ("analytic", "fe") + tuple(v.name for v in ALTERNATIVES)
     assert risk.designed_with == ("analytic", "fe")
     assert len(risk.cases) == 3 * 6 * len(risk.load_fractions)
@@ -377,8 +376,7 @@ def test_every_alternative_is_computed_not_copied(models_tc):
     alternative at 25/50/100/150 % load is that alternative's own solve: each rebuilt here
     from the matrices by its definition, and each differs from the model's."""
     d = _fe(default_design())
-    opts = models_tc.risk_options
-    risk = model_risk(d, opts.pop("compare"), **opts)
+    risk = models_tc.model_risk(d)
     analytic = models_tc.compare["analytic"]
     ext, short = models_tc.cache.influence, models_tc.alternative_cache.influence
     assert short.screw.unloaded_teeth == (0, 0) and short.nut.end_lengths_mm == (0.0, 0.0)
