@@ -42,9 +42,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import finest_grade_at_least
+from prs_geom.model.validation import positive
 
-__all__ = ["PlanetaryStage", "planetary_stage", "ContactLoad", "contact_load", "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
-           "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade"]
+__all__ = ["FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
+           "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade",
+           "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "ContactLoad", "contact_load", "PlanetaryStage",
+           "planetary_stage"]
 
 #: The member held by the housing: the other one is the output.
 FIXED_MEMBERS = ("circular_spline", "flexspline")
@@ -115,9 +118,7 @@ class FlexsplineMaterial:
 
     def __post_init__(self) -> None:
         for f in ("youngs_modulus_mpa", "allowed_bending_stress_mpa"):
-            v = getattr(self, f)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise DesignError(f, v, "must be a finite number > 0 (MPa)")
+            object.__setattr__(self, f, positive(f, getattr(self, f)))
 
 
 #: Reference flexspline materials: a spring/bearing steel and a polyamide (the source names
@@ -320,8 +321,8 @@ def planetary_stage(shift_mm: ArrayLike, sun_radius_mm: float, planet_cone_radiu
     r_s = sun_radius_mm + s * t
     r_p = planet_cone_radius_mm - s * t
     if np.any(r_s <= 0) or np.any(r_p <= 0):
-        raise DesignError("generator.shift_per_position", float(np.max(np.abs(s))),
-                          "moves the cone contact off the sun disc or the planet cone (a radius reaches 0)")
+        raise ValueError(f"a cone contact shift of {float(np.max(np.abs(s))):.3f} mm runs off the sun disc or "
+                         f"the planet cone (a radius reaches 0)")
     K = (ring_radius_mm * r_p) / (r_s * roller_radius_mm)
     stage = 1.0 + K
     i_h = np.asarray(harmonic_ratio_, dtype=np.float64)

@@ -49,7 +49,7 @@ __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
            "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section",
-           "generator_stage", "stages_in_series"]
+           "generator_stage", "stages_in_series", "TABLE_POSITIONS", "table_positions"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -300,12 +300,8 @@ class HarmonicDesign:
         if float(np.min(radius_difference(self, np.linspace(self.positions.min_mm, self.positions.max_mm, 201)))) <= 0:
             raise DesignError("positions.min_mm", self.positions.min_mm, "the radius difference must stay positive")
         if self.generator.kind == "planetary":
-            g = self.generator
-            travel = g.shift_per_position * (self.positions.max_mm - self.positions.min_mm)
-            if travel * math.tan(math.radians(g.cone_half_angle_deg)) >= g.planet_cone_radius_mm:
-                raise DesignError("generator.shift_per_position", g.shift_per_position,
-                                  f"moves the cone contact {travel:.3f} mm over the travel: the planet cone's radius "
-                                  f"{g.planet_cone_radius_mm:g} mm would reach 0")
+            # the cone contact moves monotonically: the ends of travel bound both radii
+            generator_stage(self, (self.positions.min_mm, self.positions.max_mm))
 
     @property
     def alpha(self) -> float:
@@ -413,6 +409,15 @@ def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float 
             "it_grade": grade, "ratio_change_per_um": 2e-3 / delta}
 
 
+#: Positions of the ratio table and the drive summary, evenly over the control range.
+TABLE_POSITIONS = 65
+
+
+def table_positions(d: HarmonicDesign) -> NDArray[np.float64]:
+    """The ``TABLE_POSITIONS`` positions a (mm) from positions.min_mm to positions.max_mm."""
+    return np.linspace(d.positions.min_mm, d.positions.max_mm, TABLE_POSITIONS)
+
+
 def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[dict[str, Any]]:
     """The contact state at each position a (mm; default 65 positions over the control
     range), one row each: a, generatrix tilt beta and contact angle phi (deg), contact and
@@ -422,7 +427,7 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
     spline r0 + Delta) and the finest ISO 286 grade whose tolerance at the contact diameter
     is at least Delta (:func:`prs_geom.harmonic.drive.tolerance_grade`)."""
     if a_values is None:
-        a_values = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
+        a_values = table_positions(d)
     st = contact_state(d, a_values)
     r0 = d.flexspline.neutral_radius_mm
     delta = st["radius_difference_mm"]
@@ -460,9 +465,14 @@ def generator_stage(d: HarmonicDesign, a: ArrayLike):
     g = d.generator
     a = np.asarray(a, dtype=np.float64)
     f = d.flexspline
-    return planetary_stage(g.shift_per_position * (a - d.positions.min_mm), g.sun_radius_mm,
-                           g.planet_cone_radius_mm, g.cone_half_angle_deg, g.roller_radius_mm,
-                           f.neutral_radius_mm - 0.5 * f.wall_thickness_mm, design_ratio(d, a), d.drive.fixed_member)
+    try:
+        return planetary_stage(g.shift_per_position * (a - d.positions.min_mm), g.sun_radius_mm,
+                               g.planet_cone_radius_mm, g.cone_half_angle_deg, g.roller_radius_mm,
+                               f.neutral_radius_mm - 0.5 * f.wall_thickness_mm, design_ratio(d, a),
+                               d.drive.fixed_member)
+    except ValueError as exc:
+        raise DesignError("generator.shift_per_position", g.shift_per_position,
+                          f"must keep the cone contact on both cones over the travel: {exc}") from None
 
 
 def stages_in_series(stage_ratio: ArrayLike, stages: int) -> NDArray[np.float64]:
@@ -478,13 +488,10 @@ def design_ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
     return harmonic_ratio(r0, r0 + radius_difference(d, a), d.drive.fixed_member)
 
 
-def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]] | None = None):
+def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
     """The contact's forces, torques and pressure at the positions of ``state``
-    (:func:`contact_state`; default the 65 of the ratio table), for the design's pressing
-    force, friction, safety factor and flexspline material
-    (:func:`prs_geom.harmonic.drive.contact_load`)."""
-    if state is None:
-        state = contact_state(d, np.linspace(d.positions.min_mm, d.positions.max_mm, 65))
+    (:func:`contact_state`), for the design's pressing force, friction, safety factor and
+    flexspline material (:func:`prs_geom.harmonic.drive.contact_load`)."""
     dr = d.drive
     return contact_load(d.alpha, d.flexspline.arc_radius_mm, d.flexspline.neutral_radius_mm,
                         state["contact_radius_mm"], state["cone_radius_mm"], state["radius_difference_mm"],
@@ -515,8 +522,7 @@ def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
 
 def strength_warnings(d: HarmonicDesign) -> list[str]:
     """A line when the design's smallest ratio bends its flexspline (``drive.flexspline_material``)
-    past the allowed stress, with the numbers; and when Hertz's model of the contact does not
-    hold at some positions."""
+    past the allowed stress, with the numbers."""
     i_lo = float(ratio(d, d.positions.min_mm))
     key = d.drive.flexspline_material
     s = _strength_limits(d)[key]
@@ -528,29 +534,29 @@ def strength_warnings(d: HarmonicDesign) -> list[str]:
     return out
 
 
-def drive_section(d: HarmonicDesign) -> dict[str, Any]:
+def drive_section(d: HarmonicDesign, rows: list[dict[str, Any]] | None = None) -> dict[str, Any]:
     """report.json's ``harmonic.drive``: the fixed member and the signed ratio range, the
     pressing force and the cone's normal force, the torque range, where Hertz's contact model
-    holds, the adjusting mechanism's range and resolution."""
+    holds, the adjusting mechanism's range and resolution; read off ``rows``, the ratio table
+    over the control range (default :func:`ratio_table` at :func:`table_positions`)."""
     dr = d.drive
-    a = np.linspace(d.positions.min_mm, d.positions.max_mm, 65)
-    st = contact_state(d, a)
-    load = drive_load(d, st)
-    turns, per_degree = adjusting(d, a)
-    i = design_ratio(d, a)
-    valid = a[load.hertz_valid]
+    rows = ratio_table(d) if rows is None else rows
+    first, last = rows[0], rows[-1]
+    signed = f"ratio_{dr.fixed_member}_fixed"
+    valid = [r["a_mm"] for r in rows if r["hertz_valid"]]
     return {"fixed_member": dr.fixed_member, "output": "flexspline" if dr.fixed_member == "circular_spline"
-            else "circular_spline", "ratio_at_min_position": float(i[0]), "ratio_at_max_position": float(i[-1]),
+            else "circular_spline", "ratio_at_min_position": first[signed], "ratio_at_max_position": last[signed],
             "flexspline_material": dr.flexspline_material, "pressing_force_n": dr.pressing_force_n,
-            "normal_force_n": float(load.normal_force_n[0]), "normal_force_factor": 1.0 / math.sin(d.alpha),
+            "normal_force_n": dr.pressing_force_n / math.sin(d.alpha), "normal_force_factor": 1.0 / math.sin(d.alpha),
             "friction_coefficient": dr.friction_coefficient, "slip_safety_factor": dr.slip_safety_factor,
-            "output_torque_nm": float(load.output_torque_nm[0]),
-            "input_torque_at_max_position_nm": float(load.input_torque_nm[-1]),
-            "max_contact_pressure_mpa": float(load.max_pressure_mpa.max()),
-            "hertz_valid_up_to_mm": float(valid.max()) if valid.size else None,
+            "output_torque_nm": first["output_torque_nm"],
+            "input_torque_at_max_position_nm": last["input_torque_nm"],
+            "max_contact_pressure_mpa": max(r["contact_pressure_mpa"] for r in rows),
+            "hertz_valid_up_to_mm": max(valid) if valid else None,
             "adjusting_mechanism": dr.adjusting_mechanism,
-            "adjusting_travel_per_turn_mm": dr.adjusting_travel_per_turn_mm, "adjusting_turns": float(turns[-1]),
-            "ratio_change_per_degree_at_max_position": float(per_degree[-1]),
+            "adjusting_travel_per_turn_mm": dr.adjusting_travel_per_turn_mm,
+            "adjusting_turns": last["adjusting_turns"],
+            "ratio_change_per_degree_at_max_position": last["ratio_change_per_degree"],
             "efficiency": "not modelled: the source gives no efficiency for this drive"}
 
 
@@ -575,15 +581,16 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
     """report.json's ``harmonic`` section: the cone geometry, the speed range, the ratio
     table (:func:`ratio_table`) and the diameter tolerances for three ratios."""
     rng = speed_range(d)
+    table = ratio_table(d, a_values)
     return {
         "alpha_deg": math.degrees(d.alpha),
         "a0_mm": d.a0,
         "infinite_ratio_position_mm": infinite_ratio_position(d),
         **rng,
-        "table": ratio_table(d, a_values),
+        "table": table,
         "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
         "strength": strength_section(d),
-        "drive": drive_section(d),
+        "drive": drive_section(d, table if a_values is None else None),
         "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
                        "radial inner-wave drive with the conical bore in the circular spline (the outer-wave, "
                        "end-face and sealed arrangements are not modelled yet; multi-stage drives as identical "
