@@ -51,7 +51,7 @@ import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from prs_geom.geometry.planar import point_segment_distance
-from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
+from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, drive_contact, tilt_angle
 from prs_geom.model.errors import DesignError
 
 __all__ = ["PARTS", "DEFORMATION", "WAVE_GENERATOR_RULE", "POSITION_RULE", "revolution_sections",
@@ -60,7 +60,9 @@ __all__ = ["PARTS", "DEFORMATION", "WAVE_GENERATOR_RULE", "POSITION_RULE", "revo
            "WaveGenerator", "wave_generator", "wave_generator_mesh", "wave_generator_deviation",
            "DeformedFlexspline", "deformed_flexspline", "flexspline_deviation", "HarmonicAssembly",
            "build_assembly", "cone_gap", "arc_cone_clearance", "assembly_checks", "mesh_rows",
-           "assembly_summary"]
+           "assembly_summary", "section_profile", "face_reference_position", "circular_spline_placement",
+           "GENERATOR_THICKNESS", "mapped_generator_mesh", "mapped_generator_deviation", "RATIO_SAMPLES",
+           "measured_ratio"]
 
 #: Names of the placed parts, in scene order.
 PARTS = ("circular_spline", "flexspline", "wave_generator")
@@ -84,18 +86,46 @@ def revolution_sections(radius: float, tol: float) -> int:
 
 
 def circular_spline_mesh(d: HarmonicDesign, tol: float | None = None) -> trimesh.Trimesh:
-    """The ring (own frame, bore small end at z = 0, mm) at chord tolerance ``tol`` (mm;
-    default the design's)."""
+    """The ring (own frame, mm: radial drives with the cone's small end at z = 0; the end
+    face at its reference place, :func:`circular_spline_profile`) at chord tolerance ``tol``
+    (mm; default the design's)."""
     prof = circular_spline_profile(d)
     closed = np.concatenate([prof, prof[:1]])
     tol = d.mesh.chord_tolerance_mm if tol is None else tol
-    return trimesh.creation.revolve(closed, sections=revolution_sections(d.circular_spline.outer_radius_mm, tol))
+    return trimesh.creation.revolve(closed, sections=revolution_sections(float(prof[:, 0].max()), tol))
 
 
 def flexspline_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarray:
-    """Closed (r, z) polygon of the cup's half section, counter-clockwise: (0, 0), (ro, 0),
-    the contact arc from the outer to the inner wall, (ri, t), (0, t). ``tol``: chord
-    tolerance (mm; default the design's), half of it for the arc's chords."""
+    """Closed (rho, z) polygon of the flexspline's half section in the drive frame of the
+    design's arrangement (:mod:`prs_geom.harmonic.arrangement`), counter-clockwise. Radial
+    inner wave: (0, 0), (ro, 0), the contact arc from the outer to the inner wall, (ri, t),
+    (0, t). Radial outer wave: the wall and arc mirrored about the neutral layer, the cup
+    bottom joined on the outer wall. End face: the disc from its clamp at r0 round the rim
+    arc and back (no point on the axis). ``tol``: chord tolerance (mm; default the
+    design's), half of it for the arc's chords."""
+    sec = section_profile(d, tol)
+    arr = d.arrangement
+    f = d.flexspline
+    r0, t = f.neutral_radius_mm, f.wall_thickness_mm
+    if arr.kind == "radial_inner":
+        return sec
+    body = sec[1:-1]                                  # (r, x): (ro, 0), arc ..., (ri, t)
+    rho, z = arr.to_drive(body[:, 1], body[:, 0])
+    if arr.kind == "radial_outer":
+        wall = np.column_stack([rho, z])[::-1]        # mirrored and reversed: counter-clockwise again
+        wall[0] = (r0 + 0.5 * t, 0.0)                 # the outer wall runs down to the bottom
+        wall[-1] = (r0 - 0.5 * t, t)
+        return np.concatenate([[[0.0, 0.0]], wall, [[0.0, t]]])
+    loop = np.column_stack([rho, z])
+    loop[-1] = (r0, -0.5 * t)                         # the disc's clamp face at r0
+    return loop[::-1].copy()
+
+
+def section_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarray:
+    """Closed (r, x) polygon of the working section's cup (the radial inner-wave drive's
+    half section, x from the clamp A), counter-clockwise: (0, 0), (ro, 0), the contact arc
+    from the outer to the inner wall, (ri, t), (0, t). ``tol``: chord tolerance (mm; default
+    the design's), half of it for the arc's chords."""
     f = d.flexspline
     tol = d.mesh.chord_tolerance_mm if tol is None else tol
     r0, t, rs, cs = f.neutral_radius_mm, f.wall_thickness_mm, f.arc_radius_mm, f.arc_centre_offset_mm
@@ -114,18 +144,45 @@ def flexspline_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarra
 
 
 def circular_spline_profile(d: HarmonicDesign) -> np.ndarray:
-    """(r, z) corners of the ring's half section (own frame, bore small end at z = 0, mm):
-    bore small end, outer radius at both ends, bore big end."""
+    """(rho, z) corners of the ring's half section in its own frame (mm), counter-clockwise.
+    Radial drives: the section's ring (bore small end, outer radius at both ends, bore big
+    end) with its small end at z = 0, mirrored about the neutral layer for the outer wave.
+    End face: the section's ring at the reference position :func:`face_reference_position`
+    turned into the drive (a ring whose conical face looks at the disc's rim)."""
     c = d.circular_spline
-    return np.array([[c.bore_small_radius_mm, 0.0], [c.outer_radius_mm, 0.0],
+    ring = np.array([[c.bore_small_radius_mm, 0.0], [c.outer_radius_mm, 0.0],
                      [c.outer_radius_mm, c.bore_length_mm], [c.bore_large_radius_mm, c.bore_length_mm]])
+    arr = d.arrangement
+    if arr.kind == "radial_inner":
+        return ring
+    x0 = face_reference_position(d) if arr.is_disc else 0.0
+    rho, z = arr.to_drive(ring[:, 1] + x0, ring[:, 0])
+    return np.column_stack([rho, z])[::-1].copy()
+
+
+def face_reference_position(d: HarmonicDesign) -> float:
+    """The end face's ring: the section position a (mm) at which its own frame is the drive
+    frame; at position a it is moved along the axis by
+    :meth:`~prs_geom.harmonic.arrangement.Arrangement.face_travel` (the middle of the range)."""
+    return default_position(d)
+
+
+def circular_spline_placement(d: HarmonicDesign, a: float) -> float:
+    """Axial placement (mm) of the circular spline's own frame at position a: a for the
+    radial drives, the face travel from :func:`face_reference_position` for the end face."""
+    if d.arrangement.is_disc:
+        return float(d.arrangement.face_travel(a, face_reference_position(d), math.tan(d.alpha)))
+    return float(a)
 
 
 def flexspline_mesh(d: HarmonicDesign) -> trimesh.Trimesh:
     """The undeformed cup (own frame, bottom at z = 0, mm): the profile revolved with half the
     chord tolerance as sagitta (the arc's chords take the other half)."""
     prof = flexspline_profile(d)
-    # trimesh.revolve wants a line that is closed or touches the axis; our polygon touches it
+    # trimesh.revolve wants a line that is closed or touches the axis: the cup touches it,
+    # the end face's disc is closed here
+    if d.arrangement.is_disc:
+        prof = np.concatenate([prof, prof[:1]])
     return trimesh.creation.revolve(prof, sections=revolution_sections(float(prof[:, 0].max()),
                                                                        0.5 * d.mesh.chord_tolerance_mm))
 
@@ -155,9 +212,14 @@ def tilt_meridian(d: HarmonicDesign, r: ArrayLike, z: ArrayLike,
 
 def deform(d: HarmonicDesign, r: ArrayLike, z: ArrayLike, theta: ArrayLike, beta_a: float) -> NDArray[np.float64]:
     """Assembly-frame points (..., 3) (mm) of undeformed flexspline points given by their
-    meridian coordinates (r, z) (mm) and polar angle theta (rad); broadcasts."""
+    drive-meridian coordinates (rho, z) (mm) and polar angle theta (rad); broadcasts. The
+    turn is the section's (:func:`tilt_meridian`), carried into the drive by the
+    arrangement's map."""
     theta = np.asarray(theta, dtype=np.float64)
-    rr, zz = tilt_meridian(d, r, z, meridian_tilt(beta_a, theta))
+    arr = d.arrangement
+    x, rs = arr.to_section(r, z)
+    rt, xt = tilt_meridian(d, rs, x, meridian_tilt(beta_a, theta))
+    rr, zz = arr.to_drive(xt, rt)
     return np.stack(np.broadcast_arrays(rr * np.cos(theta), rr * np.sin(theta), zz), axis=-1)
 
 
@@ -215,8 +277,8 @@ class WaveGenerator:
 
 def _inner_wall_top(d: HarmonicDesign) -> tuple[float, float]:
     """(r, z) (mm) of the undeformed profile's inner-wall top: where the contact arc meets
-    the inner wall (the third last point of :func:`flexspline_profile`)."""
-    p = flexspline_profile(d)
+    the inner wall (the third last point of :func:`section_profile`)."""
+    p = section_profile(d)
     return float(p[-3, 0]), float(p[-3, 1])
 
 
@@ -282,6 +344,54 @@ def wave_generator_deviation(wg: WaveGenerator, mesh: trimesh.Trimesh) -> float:
     return float(np.max(wg.radius(phi) - np.hypot(mid[:, 0], mid[:, 1])))
 
 
+#: Thickness of the outer-wave and end-face generators' ring across the section (fraction of r0).
+GENERATOR_THICKNESS = 0.2
+
+
+def mapped_generator_mesh(d: HarmonicDesign, wg: WaveGenerator, tol: float) -> tuple[trimesh.Trimesh, float]:
+    """The wave generator of the outer-wave and end-face drives (assembly frame, mm): in each
+    meridian the section's generator (:func:`wave_generator`, the band x_s +- h under the
+    contact, from the ellipse radius at theta inward by ``GENERATOR_THICKNESS`` r0) carried
+    into the drive by the arrangement's map: a ring outside the flexspline (outer wave), a
+    face cam under the disc's rim (end face). Its working face is placed a chord's sagitta
+    further from the flexspline, so that the chords between meridians stay off it. Returns
+    (mesh, the sagitta bound, mm)."""
+    arr = d.arrangement
+    thick = GENERATOR_THICKNESS * d.flexspline.neutral_radius_mm
+    far = float(np.max(np.abs(arr.to_drive(np.array([wg.z_min_mm, wg.z_max_mm]),
+                                           np.array([wg.semi_axis_x_mm, wg.semi_axis_y_mm]))[0])))
+    n = 4 * math.ceil(revolution_sections(far + thick, 0.5 * tol) / 4)
+    theta = 2 * math.pi * np.arange(n) / n
+    sag = (far + thick) * (1.0 - math.cos(math.pi / n))
+    eps = wg.radius(theta) - sag
+    # section corners (x, r) per meridian: working face at eps, back face thick further in
+    x = np.array([wg.z_min_mm, wg.z_max_mm, wg.z_max_mm, wg.z_min_mm])[:, None] + 0.0 * theta[None, :]
+    r = np.stack([eps - thick, eps - thick, eps, eps])
+    rho, z = arr.to_drive(x, r)
+    loop = np.column_stack([rho[:, 0], z[:, 0]])
+    area = 0.5 * float(np.sum(loop[:, 0] * np.roll(loop[:, 1], -1) - np.roll(loop[:, 0], -1) * loop[:, 1]))
+    if area < 0:                        # the map reversed the loop: keep it counter-clockwise
+        rho, z = rho[::-1], z[::-1]
+    V = np.stack([rho * np.cos(theta), rho * np.sin(theta), z], axis=-1).reshape(-1, 3)
+    faces, _, _ = _strip_faces(4, n, closed=True, offset=0)
+    return trimesh.Trimesh(V, faces, process=False), sag
+
+
+def mapped_generator_deviation(d: HarmonicDesign, wg: WaveGenerator, mesh: trimesh.Trimesh) -> float:
+    """Largest distance (mm) of the mapped generator's working face (:func:`mapped_generator_mesh`)
+    from the section's generator surface, sampled at the midpoints of its edges between
+    meridians: the placement offset plus the chord error, across the section (the working
+    face is the one at the ellipse radius, r in the section)."""
+    V = np.asarray(mesh.vertices).reshape(4, -1, 3)
+    n = V.shape[1]
+    mid = 0.5 * (V + np.roll(V, -1, axis=1))
+    theta = 2 * math.pi * (np.arange(n) + 0.5) / n
+    rho = mid[..., 0] * np.cos(theta) + mid[..., 1] * np.sin(theta)
+    _, r = d.arrangement.to_section(rho, mid[..., 2])
+    gap = np.abs(wg.radius(theta)[None, :] - r)
+    return float(np.max(gap[np.argsort(gap.mean(axis=1))[:2]]))
+
+
 # --------------------------------------------------------------------------- flexspline
 @dataclass(frozen=True, eq=False)
 class DeformedFlexspline:
@@ -290,10 +400,11 @@ class DeformedFlexspline:
     Attributes
     ----------
     mesh : trimesh.Trimesh
-        Closed mesh; vertex 0 and 1 are the axis points of the bottom's two faces, then
-        ``profile`` point j at polar angle ``theta[k]`` is vertex ``2 + j n + k``.
+        Closed mesh; for a cup vertex 0 and 1 are the axis points of the bottom's two faces,
+        then ``profile`` point j at polar angle ``theta[k]`` is vertex ``2 + j n + k`` (a
+        disc, ``closed``: ``j n + k``).
     profile : ndarray (m, 2)
-        Undeformed (r, z) profile points off the axis, in the order of
+        Undeformed (rho, z) profile points off the axis, drive frame, in the order of
         :func:`flexspline_profile` (straight walls subdivided for the twist bound), mm.
     theta : ndarray (n,)
         Polar angles of the meridians (rad), ``2 pi k / n``; n is a multiple of 4.
@@ -302,6 +413,8 @@ class DeformedFlexspline:
     arc_chord_bound_mm : float
         Bound of the profile polygon's chord error on the contact arc (mm), half the
         tolerance (:func:`flexspline_profile`).
+    closed : bool
+        The profile is a loop (the end face's disc) instead of a cup closed at the axis.
     """
 
     mesh: trimesh.Trimesh
@@ -309,64 +422,82 @@ class DeformedFlexspline:
     theta: NDArray[np.float64]
     beta_rad: float
     arc_chord_bound_mm: float
+    closed: bool = False
 
     def meridian(self, k: int) -> NDArray[np.float64]:
-        """(r', z') (mm) of the closed deformed meridian polygon at ``theta[k]``, the axis
-        points included (bottom axis point first)."""
+        """(rho', z') (mm) of the closed deformed meridian polygon at ``theta[k]`` in the drive
+        frame: the cup's with its axis points (bottom axis point first), the disc's loop with
+        its first point repeated at the end."""
         V = np.asarray(self.mesh.vertices)
         n = len(self.theta)
-        ring = V[2 + np.arange(len(self.profile)) * n + k]
+        ring = V[(0 if self.closed else 2) + np.arange(len(self.profile)) * n + k]
         c, s = math.cos(self.theta[k]), math.sin(self.theta[k])
         # radial coordinate in the meridian's own direction (signed, so no abs() hides a flip)
         rz = np.column_stack([ring[:, 0] * c + ring[:, 1] * s, ring[:, 2]])
+        if self.closed:
+            return np.concatenate([rz, rz[:1]])
         return np.concatenate([[[0.0, V[0, 2]]], rz, [[0.0, V[1, 2]]]])
 
 
-def _strip_faces(m: int, n: int) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+def _strip_faces(m: int, n: int, closed: bool = False,
+                 offset: int = 2) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """Faces of the wall strips between profile points j, j+1 and meridians k, k+1, with
-    each corner's profile index and unwrapped meridian index (for the deviation check)."""
-    j, k = np.meshgrid(np.arange(m - 1), np.arange(n), indexing="ij")
+    each corner's profile index and unwrapped meridian index (for the deviation check).
+    ``closed``: the profile is a loop (its last point joins the first). Vertex of profile
+    point j at meridian k: ``offset + j n + k``."""
+    j, k = np.meshgrid(np.arange(m if closed else m - 1), np.arange(n), indexing="ij")
     j, k = j.ravel(), k.ravel()
     corners_j = np.concatenate([np.column_stack([j, j, j + 1]), np.column_stack([j, j + 1, j + 1])])
     corners_k = np.concatenate([np.column_stack([k, k + 1, k + 1]), np.column_stack([k, k + 1, k])])
-    faces = 2 + corners_j * n + corners_k % n
+    faces = offset + (corners_j % m) * n + corners_k % n
     return faces, corners_j, corners_k
 
 
-def deformed_flexspline(d: HarmonicDesign, a: float, tol: float | None = None) -> DeformedFlexspline:
+def deformed_flexspline(d: HarmonicDesign, a: float, tol: float | None = None,
+                        beta: float | None = None) -> DeformedFlexspline:
     """The flexspline deformed by the wave generator at position a (mm), meshed watertight
-    at chord tolerance ``tol`` (mm; default the design's).
+    at chord tolerance ``tol`` (mm; default the design's), in the drive frame of the
+    design's arrangement. ``beta`` (rad) overrides the model's tilt (0: the undeformed
+    flexspline with the same vertices, for measurements that follow a material point).
 
     Error budget: tol / 2 for the contact arc's chords (the profile, as for the undeformed
     mesh), tol / 4 for the chords around the circumference (sections from the largest
-    curvature of the deformed section, radius + 4 x the radial wave amplitude), tol / 4 for
-    the twist of a wall quad between two meridians of different tilt (bilinear patch:
+    curvature of the deformed section, radius + 4 x the wave amplitude), tol / 4 for the
+    twist of a wall quad between two meridians of different tilt (bilinear patch:
     deviation = segment length x tilt difference / 4, so the straight walls are cut into
     segments of at most tol / (2 |beta| dtheta)). :func:`flexspline_deviation` measures it.
     """
     tol = d.mesh.chord_tolerance_mm if tol is None else float(tol)
-    beta = float(tilt_angle(d, a))
+    beta = float(tilt_angle(d, a)) if beta is None else float(beta)
     prof = flexspline_profile(d, tol)
-    # drop the two axis points: (0, 0) first and (0, t) last
-    body = prof[1:-1]
-    # circumferential sections: radial wave amplitude w at each profile point
-    r_up, _ = tilt_meridian(d, body[:, 0], body[:, 1], abs(beta))
-    r_dn, _ = tilt_meridian(d, body[:, 0], body[:, 1], -abs(beta))
-    w = 0.5 * float(np.max(r_up - r_dn))
-    r_eff = float(np.max(r_up)) + 4.0 * w
+    disc = d.arrangement.is_disc
+    # the cup's two axis points, (0, 0) first and (0, t) last, close it by fans
+    body = prof if disc else prof[1:-1]
+    # circumferential sections: wave amplitude w at each profile point
+    up = deform(d, body[:, 0], body[:, 1], 0.0, abs(beta))
+    dn = deform(d, body[:, 0], body[:, 1], 0.5 * math.pi, abs(beta))
+    dn = np.column_stack([dn[:, 1], dn[:, 0], dn[:, 2]])   # the minor axis's meridian turned onto x
+    # the larger of the radial (cup) and the axial (disc) wave
+    w = 0.5 * float(np.max(np.abs(up - dn)[:, [0, 2]]))
+    r_eff = float(np.max(np.hypot(up[:, 0], up[:, 1]))) + 4.0 * w
     n = 4 * math.ceil(revolution_sections(r_eff, 0.25 * tol) / 4)
     dtheta = 2 * math.pi / n
     seg = math.inf if beta == 0 else tol / (2.0 * abs(beta) * dtheta)
     # subdivide the long straight segments (walls) so that each is at most `seg` long
+    ends = np.concatenate([body[1:], body[:1]]) if disc else body[1:]
     pts = [body[:1]]
-    for p, q in zip(body[:-1], body[1:]):
+    for p, q in zip(body[:len(ends)], ends):
         parts = max(1, math.ceil(float(np.linalg.norm(q - p)) / seg))
         u = np.arange(1, parts + 1)[:, None] / parts
         pts.append(p + u * (q - p))
-    profile = np.concatenate(pts)
+    profile = np.concatenate(pts)[:-1] if disc else np.concatenate(pts)
     m = len(profile)
     theta = dtheta * np.arange(n)
     ring = deform(d, profile[:, 0][:, None], profile[:, 1][:, None], theta[None, :], beta).reshape(-1, 3)
+    if disc:
+        strips, _, _ = _strip_faces(m, n, closed=True, offset=0)
+        mesh = trimesh.Trimesh(ring, strips, process=False)
+        return DeformedFlexspline(mesh, profile, theta, beta, 0.5 * tol, closed=True)
     A0, A1 = [0.0, 0.0, 0.0], [0.0, 0.0, float(prof[-1, 1])]
     V = np.concatenate([[A0, A1], ring])
     strips, _, _ = _strip_faces(m, n)
@@ -382,22 +513,36 @@ def deformed_flexspline(d: HarmonicDesign, a: float, tol: float | None = None) -
 def flexspline_deviation(d: HarmonicDesign, fs: DeformedFlexspline) -> float:
     """Largest distance (mm) between the wall faces and the deformed profile polygon's
     surface, sampled at each face's centroid and edge midpoints: the mesh point against
-    the exact image (:func:`deform`) of the same parameters (profile point, polar angle).
+    the exact image (:func:`deform`) of the same parameters (profile point, polar angle),
+    across the surface (along its normal there, from central differences; the offset along
+    it is a parameter shift, and its second-order share, offset^2 / (2 x the surface's
+    radius of curvature), stays below 1e-3 mm at these chord tolerances).
     This is the circumferential chord and twist error; the arc's chord error is bounded
     separately (``arc_chord_bound_mm``). The bottom fans are exact by construction."""
     m, n = len(fs.profile), len(fs.theta)
-    faces, cj, ck = _strip_faces(m, n)
+    faces, cj, ck = _strip_faces(m, n, closed=fs.closed, offset=0 if fs.closed else 2)
     V = np.asarray(fs.mesh.vertices)
     dtheta = 2 * math.pi / n
     worst = 0.0
     weights = np.array([[1, 1, 1], [1, 1, 0], [0, 1, 1], [1, 0, 1]], float)
     weights /= weights.sum(axis=1, keepdims=True)
+    # each face's segment direction in the profile, for the surface's normal
+    seg = fs.profile[(cj[:, 1] + (cj[:, 1] == cj[:, 0])) % m] - fs.profile[cj[:, 0] % m]
+    seg = seg / np.linalg.norm(seg, axis=1, keepdims=True)
+    h = 1e-4
     for wgt in weights:                     # four sample points per face, each vectorised
         mesh_pt = np.einsum("c,fcd->fd", wgt, V[faces])
-        rz = np.einsum("c,fcd->fd", wgt, fs.profile[cj])
+        rz = np.einsum("c,fcd->fd", wgt, fs.profile[cj % m])
         th = (ck * dtheta) @ wgt
         exact = deform(d, rz[:, 0], rz[:, 1], th, fs.beta_rad)
-        worst = max(worst, float(np.max(np.linalg.norm(mesh_pt - exact, axis=1))))
+        # the offset across the exact surface (along it is a shift of parameters, not an
+        # error: a radial segment's chord centroid sits at other (rho, theta) in the surface)
+        d_s = deform(d, rz[:, 0] + h * seg[:, 0], rz[:, 1] + h * seg[:, 1], th, fs.beta_rad) - \
+            deform(d, rz[:, 0] - h * seg[:, 0], rz[:, 1] - h * seg[:, 1], th, fs.beta_rad)
+        d_t = deform(d, rz[:, 0], rz[:, 1], th + h, fs.beta_rad) - deform(d, rz[:, 0], rz[:, 1], th - h, fs.beta_rad)
+        normal = np.cross(d_s, d_t)
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        worst = max(worst, float(np.max(np.abs(np.einsum("fd,fd->f", mesh_pt - exact, normal)))))
     return worst
 
 
@@ -453,10 +598,14 @@ def build_assembly(d: HarmonicDesign, a: float | None = None, tol: float | None 
     tol = d.mesh.chord_tolerance_mm if tol is None else float(tol)
     wg = wave_generator(d, a)
     fs = deformed_flexspline(d, a, tol)
+    if d.arrangement.kind == "radial_inner":
+        generator = (wave_generator_mesh(wg, tol), _translation(wg.z_min_mm))
+    else:
+        generator = (mapped_generator_mesh(d, wg, tol)[0], np.eye(4))
     parts = {
-        "circular_spline": (circular_spline_mesh(d, tol), _translation(a)),
+        "circular_spline": (circular_spline_mesh(d, tol), _translation(circular_spline_placement(d, a))),
         "flexspline": (fs.mesh, np.eye(4)),
-        "wave_generator": (wave_generator_mesh(wg, tol), _translation(wg.z_min_mm)),
+        "wave_generator": generator,
     }
     return HarmonicAssembly(d, a, fs.beta_rad, tol, wg, fs, parts)
 
@@ -478,7 +627,7 @@ def arc_cone_clearance(d: HarmonicDesign, a: float, theta: ArrayLike) -> NDArray
     f = d.flexspline
     beta = meridian_tilt(float(tilt_angle(d, a)), theta)
     cr, cz = tilt_meridian(d, f.neutral_radius_mm - f.arc_centre_offset_mm, d.x_s, beta)
-    prof = flexspline_profile(d)
+    prof = section_profile(d)
     r_c, z_c = f.neutral_radius_mm - f.arc_centre_offset_mm, d.x_s
     th0 = math.atan2(prof[2, 1] - z_c, prof[2, 0] - r_c)          # arc start (outer wall junction)
     th1 = math.atan2(prof[-3, 1] - z_c, prof[-3, 0] - r_c)        # arc end (inner wall junction)
@@ -487,6 +636,13 @@ def arc_cone_clearance(d: HarmonicDesign, a: float, theta: ArrayLike) -> NDArray
     if np.any(foot < th0) or np.any(foot > th1):
         raise ValueError("the cone's nearest point leaves the contact arc: the clearance formula does not apply")
     return cone_gap(d, np.stack([cr, cz], axis=-1), a) - f.arc_radius_mm
+
+
+def _section_meridian(d: HarmonicDesign, mer: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(r, x) in the working section of drive-meridian points (rho, z) (mm), in the column
+    order :func:`cone_gap` takes."""
+    x, r = d.arrangement.to_section(mer[:, 0], mer[:, 1])
+    return np.column_stack([r, x])
 
 
 def _manifold(V: NDArray[np.float64], F: NDArray[np.int64]):
@@ -519,12 +675,14 @@ def assembly_checks(asm: HarmonicAssembly) -> dict[str, Any]:
     n = len(fs.theta)
     c = d.circular_spline
     gaps = []
+    # the cone's extent along the section's generatrix: it moves with a in the radial drives
+    x_lo = face_reference_position(d) if d.arrangement.is_disc else a
     for k in (0, n // 2):                   # theta = 0 and pi: the wave's two lobes
-        mer = fs.meridian(k)
-        inside = (mer[:, 1] >= a) & (mer[:, 1] <= a + c.bore_length_mm)
+        mer = _section_meridian(d, fs.meridian(k))
+        inside = (mer[:, 1] >= x_lo) & (mer[:, 1] <= x_lo + c.bore_length_mm)
         gaps.append(float(np.min(cone_gap(d, mer[inside], a))))
     px, pr = contact_point(d, a)
-    meridian = fs.meridian(0)
+    meridian = _section_meridian(d, fs.meridian(0))
     offset = float(point_segment_distance(np.array([pr, px]), meridian[:-1], meridian[1:]).min())
     theta = np.linspace(0.0, 2 * math.pi, 721)
     arc_gap = arc_cone_clearance(d, a, theta)
@@ -564,10 +722,67 @@ def assembly_checks(asm: HarmonicAssembly) -> dict[str, Any]:
         "arc_cone_clearance_min_mm": float(np.min(arc_gap)),
         "wave_generator_clearance_min_mm": float(np.min(wg_gap)),
         "wave_generator_clearance_max_mm": float(np.max(wg_gap)),
+        "measured_ratio": measured_ratio(asm),
         "interference": {"found": found, "pairs": pairs,
                          "rule": "overlap thicker than 2 x chord tolerance (mean thickness 2V/A) is interference"},
         "warnings": warnings,
     }
+
+
+#: Samples around the circumference of each measured circle (:func:`measured_ratio`).
+RATIO_SAMPLES = 24
+
+
+def _mean_radius(mesh: trimesh.Trimesh, rho: float, z: float) -> float:
+    """Mean distance from the axis (mm) of the mesh's points nearest to the circle (rho, z)
+    (mm) in ``RATIO_SAMPLES`` meridians: each meridian is the mesh cut by the half-plane at
+    that angle (trimesh.intersections.mesh_plane), the nearest point of its segments to
+    (rho, z) taken; the mesh's radius at that circle."""
+    out = []
+    for th in 2 * math.pi * (np.arange(RATIO_SAMPLES) + 0.25) / RATIO_SAMPLES:
+        u = np.array([math.cos(th), math.sin(th), 0.0])
+        seg = trimesh.intersections.mesh_plane(mesh, np.array([-u[1], u[0], 0.0]), np.zeros(3))
+        seg = seg[(seg[:, :, :2] @ u[:2]).min(axis=1) > 0]          # the half-plane at th only
+        p = np.stack([seg @ u, seg[:, :, 2]], axis=-1)              # (rho, z) segment ends
+        e = p[:, 1] - p[:, 0]
+        q = np.array([rho, z])
+        t = np.clip(np.einsum("sd,sd->s", q - p[:, 0], e) / np.maximum(np.einsum("sd,sd->s", e, e), 1e-300), 0, 1)
+        near = p[:, 0] + t[:, None] * e
+        out.append(float(near[np.argmin(np.linalg.norm(near - q, axis=1)), 0]))
+    return float(np.mean(out))
+
+
+def measured_ratio(asm: HarmonicAssembly) -> dict[str, Any]:
+    """The ratio measured on the placed meshes: the circumference difference at the contact
+    taken from the circular spline's placed mesh (its radius at the contact circle) and the
+    undeformed flexspline's mesh (its radius at the circle of the contact's material point),
+    both as the mean radius of the mesh points nearest those circles
+    (:func:`_mean_radius`); the flexspline's rolling radius is the mean of its two wall
+    radii half way up the wall (radial drives) or the material circle's (end face). The
+    contact's place is the model's (:func:`~prs_geom.harmonic.model.drive_contact`); the
+    meshes resolve it when Delta is at least 100 chord tolerances (``resolved``)."""
+    d, a, tol = asm.design, asm.position_mm, asm.tolerance_mm
+    c = drive_contact(d, a)
+    cs_mesh, _ = asm.parts["circular_spline"]
+    placed = trimesh.Trimesh(asm.placed_vertices("circular_spline"), np.asarray(cs_mesh.faces), process=False)
+    flat = deformed_flexspline(d, a, tol, beta=0.0).mesh
+    R = _mean_radius(placed, float(c.contact_rho_mm), float(c.contact_z_mm))
+    r = _mean_radius(flat, float(c.material_rho_mm), float(c.material_z_mm))
+    f = d.flexspline
+    if d.arrangement.is_disc:
+        r_f = r
+    else:
+        mid = 0.5 * d.x_s
+        r_f = 0.5 * (_mean_radius(flat, f.neutral_radius_mm + f.wall_thickness_mm, mid)
+                     + _mean_radius(flat, f.neutral_radius_mm - f.wall_thickness_mm, mid))
+    delta = R - r
+    model = float(c.ratio)
+    measured = abs(r_f / delta)
+    return {"position_mm": a, "circular_spline_radius_mm": R, "flexspline_radius_mm": r,
+            "rolling_radius_mm": r_f, "radius_difference_mm": delta,
+            "model_radius_difference_mm": float(c.radius_difference_mm), "ratio": measured, "model_ratio": model,
+            "relative_difference": measured / model - 1.0,
+            "resolved": bool(abs(float(c.radius_difference_mm)) >= 100.0 * tol)}
 
 
 def mesh_rows(asm: HarmonicAssembly) -> list[dict[str, Any]]:
@@ -577,10 +792,12 @@ def mesh_rows(asm: HarmonicAssembly) -> list[dict[str, Any]]:
     fs_mesh, _ = asm.parts["flexspline"]
     wg_mesh, _ = asm.parts["wave_generator"]
     rows = []
+    d = asm.design
+    wg_dev = (wave_generator_deviation(asm.wave_generator, wg_mesh) if d.arrangement.kind == "radial_inner"
+              else mapped_generator_deviation(d, asm.wave_generator, wg_mesh))
     for name, mesh, measured, bound in (
-            ("flexspline", fs_mesh, flexspline_deviation(asm.design, asm.flexspline),
-             asm.flexspline.arc_chord_bound_mm),
-            ("wave_generator", wg_mesh, wave_generator_deviation(asm.wave_generator, wg_mesh), 0.0)):
+            ("flexspline", fs_mesh, flexspline_deviation(d, asm.flexspline), asm.flexspline.arc_chord_bound_mm),
+            ("wave_generator", wg_mesh, wg_dev, 0.0)):
         dev = measured + bound
         rows.append({"part": name, "triangles": int(len(mesh.faces)), "watertight": bool(mesh.is_watertight),
                      "volume_mm3": float(mesh.volume), "chord_tolerance_mm": tol,
@@ -596,6 +813,7 @@ def assembly_summary(asm: HarmonicAssembly) -> dict[str, Any]:
     st = contact_state(d, a)
     wg = asm.wave_generator
     return {
+        "arrangement": d.drive.arrangement,
         "position_mm": a,
         "position_rule": POSITION_RULE,
         "beta_deg": math.degrees(asm.beta_rad),

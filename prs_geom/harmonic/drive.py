@@ -45,7 +45,7 @@ from prs_geom.model.standards import finest_grade_at_least
 from prs_geom.model.validation import positive
 
 __all__ = ["FIXED_MEMBERS", "harmonic_ratio", "toothed_ratio", "FlexsplineMaterial", "FLEXSPLINE_MATERIALS",
-           "flexspline_bending_stress", "StrengthLimit", "strength_limit", "tolerance_grade",
+           "flexspline_bending_stress", "disc_wave_stress", "StrengthLimit", "strength_limit", "tolerance_grade",
            "CIRCULAR_SPLINE_STEEL", "HERTZ_VALID_FRACTION", "ContactLoad", "contact_load", "PlanetaryStage",
            "planetary_stage"]
 
@@ -145,6 +145,18 @@ def flexspline_bending_stress(radius_difference_mm: ArrayLike, radius_mm: float,
     return 3.0 * youngs_modulus_mpa * wall_mm * delta / (2.0 * radius_mm ** 2)
 
 
+def disc_wave_stress(axial_amplitude_mm: ArrayLike, radius_mm: ArrayLike, wall_mm: float,
+                     youngs_modulus_mpa: float) -> NDArray[np.float64]:
+    """Largest bending stress (MPa) of the end-face drive's disc rim, a thin ring of radius
+    ``radius_mm`` bent out of its plane into w = W cos(2 theta) (W = ``axial_amplitude_mm``):
+    its curvature changes by w'' / r^2 = 4 W / r^2 at the major axis, so
+    sigma = E (t / 2) 4 W / r^2 = 2 E t W / r^2. The twist of the rim and the disc's radial
+    bending near its clamp are left out (an estimate, as the thin-ring one of the cup)."""
+    w = np.abs(np.asarray(axial_amplitude_mm, dtype=np.float64))
+    r = np.asarray(radius_mm, dtype=np.float64)
+    return 2.0 * youngs_modulus_mpa * wall_mm * w / r ** 2
+
+
 @dataclass(frozen=True)
 class StrengthLimit:
     """What the flexspline's allowed stress permits.
@@ -236,7 +248,7 @@ class ContactLoad:
 def contact_load(alpha_rad: float, arc_radius_mm: float, neutral_radius_mm: float, contact_radius_mm: ArrayLike,
                  cone_radius_mm: ArrayLike, radius_difference_mm: ArrayLike, ratio: ArrayLike,
                  pressing_force_n: float, friction_coefficient: float, slip_safety_factor: float,
-                 material: FlexsplineMaterial) -> ContactLoad:
+                 material: FlexsplineMaterial, circumferential_curvature_sum: ArrayLike | None = None) -> ContactLoad:
     """The contact's forces, torque capacity and Hertz pressure (docs/theory/harmonic.md,
     "Pressing force and torque").
 
@@ -248,7 +260,12 @@ def contact_load(alpha_rad: float, arc_radius_mm: float, neutral_radius_mm: floa
     1 / r_c + 3 Delta / r0^2 (thin ring), against the bore, -1 / R_c, both times cos(alpha)
     (normal curvature of a surface of revolution). The pair nearly conforms around the
     circumference, so the ellipse is long there; Hertz holds while that semi-axis is small
-    against r_c (``hertz_valid``)."""
+    against r_c (``hertz_valid``).
+
+    ``alpha_rad`` is the half-angle of the circular spline's working cone about the axis (the
+    end-face drive's face: 90 deg - alpha). ``circumferential_curvature_sum`` (1/mm, per
+    position) replaces the radial inner-wave drive's sum
+    cos(alpha) (1 / r_c + 3 Delta / r0^2 - 1 / R_c) for the other arrangements."""
     from prs_geom.analysis.hertz import hertz_contact
 
     r_c = np.atleast_1d(np.asarray(contact_radius_mm, dtype=np.float64))
@@ -262,8 +279,12 @@ def contact_load(alpha_rad: float, arc_radius_mm: float, neutral_radius_mm: floa
     ca = math.cos(alpha_rad)
     p_max, axes = np.empty(r_c.shape), np.empty(r_c.shape + (2,))
     for k in range(r_c.size):     # a handful of positions; each a scalar Hertz solve
-        flex = ca * (1.0 / r_c[k] + 3.0 * delta[k] / neutral_radius_mm ** 2)
-        h = hertz_contact((1.0 / arc_radius_mm, flex, 0.0, -ca / R_c[k]), eta)
+        if circumferential_curvature_sum is None:
+            flex = ca * (1.0 / r_c[k] + 3.0 * delta[k] / neutral_radius_mm ** 2)
+            h = hertz_contact((1.0 / arc_radius_mm, flex, 0.0, -ca / R_c[k]), eta)
+        else:
+            h = hertz_contact((1.0 / arc_radius_mm, float(np.ravel(circumferential_curvature_sum)[k]), 0.0, 0.0),
+                              eta)
         a, b = h.semi_axes(0.5 * normal[k])
         p_max[k] = 3.0 * 0.5 * normal[k] / (2.0 * math.pi * a * b)
         # plane 1 is the meridian, plane 2 the circumference

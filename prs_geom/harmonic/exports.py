@@ -44,6 +44,7 @@ from prs_geom.geometry.planar import point_segment_distance
 # the parts' undeformed geometry lives with the assembly; these names stay importable from here
 from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
                                         flexspline_mesh, flexspline_profile, revolution_sections)
+from prs_geom.harmonic.assembly import default_position
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
 
 __all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "plot_drive", "write_dxf", "ASSEMBLY_MATERIALS",
@@ -96,21 +97,21 @@ def plot_drive(d: HarmonicDesign, out: Path) -> list[str]:
     flexspline's wall bending stress against each reference material's allowed stress, and the
     torque capacity and Hertz pressure over the travel."""
     from prs_geom.exports.plots import plt, save_figure
-    from prs_geom.harmonic.drive import FLEXSPLINE_MATERIALS, flexspline_bending_stress
-    from prs_geom.harmonic.model import drive_load, radius_difference
+    from prs_geom.harmonic.drive import FLEXSPLINE_MATERIALS
+    from prs_geom.harmonic.model import drive_load, flexspline_stress
 
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.6))
     _sketch(d, ax[0])
     a = np.linspace(d.positions.min_mm, d.positions.max_mm, 200)
     f = d.flexspline
     for k, (key, mat) in enumerate(FLEXSPLINE_MATERIALS.items()):
-        sigma = flexspline_bending_stress(radius_difference(d, a), f.neutral_radius_mm, f.wall_thickness_mm,
-                                          mat.youngs_modulus_mpa)
+        sigma = flexspline_stress(d, a, mat)
         ax[1].semilogy(a, sigma, color=f"C{k}", label=f"{key}: wall stress")
         ax[1].axhline(mat.allowed_bending_stress_mpa, color=f"C{k}", ls="--", label=f"{key}: allowed")
     ax[1].set_xlabel("position a (mm)")
     ax[1].set_ylabel("flexspline bending stress (MPa)")
-    ax[1].set_title(f"wall {f.wall_thickness_mm:g} mm, sigma = 3 E t Delta / (2 r0^2)", fontsize=9)
+    rule = "2 E t W / (r0 + L)^2, W = L sin(beta)" if d.arrangement.is_disc else "3 E t Delta / (2 r0^2)"
+    ax[1].set_title(f"wall {f.wall_thickness_mm:g} mm, sigma = {rule}", fontsize=9)
     ax[1].grid(alpha=0.3, which="both")
     ax[1].legend(fontsize=7)
     st = contact_state(d, a)
@@ -136,41 +137,60 @@ def plot_drive(d: HarmonicDesign, out: Path) -> list[str]:
 
 
 def _sketch(d: HarmonicDesign, ax: Any) -> None:
-    """The arrangement sketch on ``ax``: axial half-section, x along the axis from the
-    flexspline bottom, r up (mm)."""
+    """The arrangement sketch on ``ax``: the drive's half-section, z along the axis, rho the
+    distance from it (mm); the working section drawn through the arrangement's map
+    (:mod:`prs_geom.harmonic.arrangement`)."""
     f, c = d.flexspline, d.circular_spline
+    arr = d.arrangement
     a = d.positions.drawing_mm[-1]
     beta = float(tilt_angle(d, a))
     L, r0 = f.length_mm, f.neutral_radius_mm
-    # flexspline: bottom diaphragm and the generatrix tilted by beta about A = (0, r0)
+
+    def draw(x: Any, r: Any) -> tuple[Any, Any]:
+        rho, z = arr.to_drive(x, r)
+        return z, rho
+
+    # flexspline: the bottom diaphragm to the axis (the disc's clamp), the generatrix tilted
+    # by beta about A = (0, r0)
     end = (L * math.cos(beta), r0 + L * math.sin(beta))
-    ax.plot([0.0, 0.0], [0.0, r0], color="C0", lw=2)
-    ax.plot([0.0, end[0]], [r0, end[1]], color="C0", lw=2, label="flexspline")
+    if arr.is_disc:
+        ax.plot(*draw([0.0, 0.0], [r0 - 3.0, r0 + 3.0]), color="k", lw=3)
+    else:
+        ax.plot([0.0, 0.0], [0.0, r0], color="C0", lw=2)
+    ax.plot(*draw([0.0, end[0]], [r0, end[1]]), color="C0", lw=2, label="flexspline")
     cx, cr = contact_point(d, a)
     centre = (d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta),
               r0 + d.x_s * math.sin(beta) - f.arc_centre_offset_mm * math.cos(beta))
     # the contact arc around its contact point, which lies at 90 deg + alpha from the centre
     psi = 0.5 * math.pi + d.alpha + np.radians(np.linspace(-60.0, 60.0, 41))
-    ax.plot(centre[0] + f.arc_radius_mm * np.cos(psi), centre[1] + f.arc_radius_mm * np.sin(psi), color="C0", lw=2)
-    # circular spline: the ring with its conical bore, small end at x = a
-    ring = np.array([[a, c.bore_small_radius_mm], [a, c.outer_radius_mm], [a + c.bore_length_mm, c.outer_radius_mm],
-                     [a + c.bore_length_mm, c.bore_large_radius_mm], [a, c.bore_small_radius_mm]])
+    ax.plot(*draw(centre[0] + f.arc_radius_mm * np.cos(psi), centre[1] + f.arc_radius_mm * np.sin(psi)),
+            color="C0", lw=2)
+    # circular spline: the ring with its conical wall (the end face's ring keeps its radial
+    # place and moves along the axis: the same face line)
+    x0, shift = a, 0.0
+    if arr.is_disc:
+        x0 = default_position(d)
+        shift = float(arr.face_travel(a, x0, math.tan(d.alpha)))
+    ring = np.array([[x0, c.bore_small_radius_mm], [x0, c.outer_radius_mm],
+                     [x0 + c.bore_length_mm, c.outer_radius_mm], [x0 + c.bore_length_mm, c.bore_large_radius_mm],
+                     [x0, c.bore_small_radius_mm]])
     fixed = d.drive.fixed_member
-    ax.fill(ring[:, 0], ring[:, 1], facecolor="0.85" if fixed == "circular_spline" else "none",
+    rz, rr = draw(ring[:, 0], ring[:, 1])
+    ax.fill(rz + (shift if arr.is_disc else 0.0), rr, facecolor="0.85" if fixed == "circular_spline" else "none",
             edgecolor="C1", hatch="///" if fixed == "circular_spline" else None, lw=1.5, label="circular spline")
-    # wave generator inside the open end
+    # wave generator under the working section's open end
     gx = end[0] - 0.5 * f.arc_radius_mm
-    ax.fill([gx - 6.0, gx + 6.0, gx + 6.0, gx - 6.0], [0.0, 0.0, r0 - 2.0, r0 - 2.0], facecolor="C2", alpha=0.25,
-            edgecolor="C2", label="wave generator (input)")
-    ax.plot([cx], [cr], "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
+    ax.fill(*draw([gx - 6.0, gx + 6.0, gx + 6.0, gx - 6.0], [0.0, 0.0, r0 - 2.0, r0 - 2.0]), facecolor="C2",
+            alpha=0.25, edgecolor="C2", label="wave generator (input)")
+    ax.plot(*draw([cx], [cr]), "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
     out = "flexspline" if fixed == "circular_spline" else "circular spline"
-    ax.set_title(f"{fixed.replace('_', ' ')} fixed (hatched), {out} output; cone {math.degrees(d.alpha):.3f} deg",
-                 fontsize=9)
-    ax.set_xlabel("x from the flexspline bottom (mm)")
-    ax.set_ylabel("r (mm)")
+    ax.set_title(f"{arr.kind.replace('_', ' ')}: {fixed.replace('_', ' ')} fixed (hatched), {out} output; "
+                 f"cone {math.degrees(d.alpha):.3f} deg", fontsize=9)
+    ax.set_xlabel("z along the axis (mm)")
+    ax.set_ylabel("distance from the axis (mm)")
     ax.set_aspect("equal")
-    ax.set_xlim(-5.0, a + c.bore_length_mm + 5.0)
-    ax.set_ylim(0.0, c.outer_radius_mm + 10.0)
+    ax.autoscale()
+    ax.set_ylim(bottom=0.0)
     ax.legend(fontsize=7, loc="lower left")
 
 

@@ -38,7 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
-from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, contact_load, harmonic_ratio,
+from prs_geom.harmonic.arrangement import (ARRANGEMENTS, NOT_MODELLED, Arrangement, SectionContact,
+                                          section_contact)
+from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, StrengthLimit, contact_load,
+                                     disc_wave_stress, flexspline_bending_stress, harmonic_ratio,
                                      planetary_stage, strength_limit, tolerance_grade)
 from prs_geom.model.validation import check_name, positive, real, size
 from prs_geom.model.errors import DesignError
@@ -49,7 +52,8 @@ __all__ = ["Flexspline", "CircularSpline", "Positions", "HarmonicMesh", "Drive",
            "HarmonicDesign", "tilt_angle", "contact_state", "radius_difference", "ratio", "contact_point",
            "infinite_ratio_position", "speed_range", "tolerance_for_ratio", "harmonic_report", "ratio_table",
            "strength_section", "strength_warnings", "design_ratio", "drive_load", "adjusting", "drive_section",
-           "generator_stage", "stages_in_series", "TABLE_POSITIONS", "table_positions"]
+           "generator_stage", "stages_in_series", "TABLE_POSITIONS", "table_positions", "drive_contact",
+           "section_radius_difference", "flexspline_stress"]
 
 @dataclass(frozen=True)
 class Flexspline:
@@ -150,6 +154,10 @@ class Drive:
     stages : int
         Identical stages in series, adjusted together (1 to 4): the total ratio is the stage
         ratio to that power (each stage's output drives the next one's generator).
+    arrangement : str
+        A key of :data:`prs_geom.harmonic.arrangement.ARRANGEMENTS`: where the working section
+        (the ``[flexspline]``, ``[circular_spline]`` and ``[positions]`` fields) sits in the drive,
+        ``"radial_inner"`` (the published drive), ``"radial_outer"`` or ``"end_face"``.
     """
 
     fixed_member: str = "circular_spline"
@@ -160,8 +168,12 @@ class Drive:
     adjusting_mechanism: str = "screw"
     adjusting_travel_per_turn_mm: float = 1.0
     stages: int = 1
+    arrangement: str = "radial_inner"
 
     def __post_init__(self) -> None:
+        if self.arrangement not in ARRANGEMENTS:
+            raise DesignError("arrangement", self.arrangement, f"must be one of {', '.join(ARRANGEMENTS)} "
+                                                               "(the sealed drive is not modelled)")
         if self.fixed_member not in FIXED_MEMBERS:
             raise DesignError("fixed_member", self.fixed_member, f"must be one of {', '.join(FIXED_MEMBERS)}")
         if self.flexspline_material not in FLEXSPLINE_MATERIALS:
@@ -244,6 +256,7 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "drive.adjusting_mechanism": '"screw", "ball-screw", "worm", "rack" or "gears"',
     "drive.adjusting_travel_per_turn_mm": "axial travel of the circular spline per adjusting-input turn (mm)",
     "drive.stages": "identical stages in series, adjusted together (1 to 4)",
+    "drive.arrangement": '"radial_inner", "radial_outer" or "end_face": where the working section sits',
     "generator.kind": '"elliptical" (disc, turns with the input) or "planetary" (cone discs, carrier = wave)',
     "generator.sun_radius_mm": "planetary: input cone disc radius at the cone contact, at positions.min_mm (mm)",
     "generator.planet_cone_radius_mm": "planetary: support-shaft cone radius at that contact (mm)",
@@ -297,11 +310,32 @@ class HarmonicDesign:
         if a_inf is not None and self.positions.max_mm >= a_inf:
             raise DesignError("positions.max_mm", self.positions.max_mm,
                               f"must be below the infinite-ratio position {a_inf:.6f} mm (radius difference reaches 0)")
-        if float(np.min(radius_difference(self, np.linspace(self.positions.min_mm, self.positions.max_mm, 201)))) <= 0:
+        grid = np.linspace(self.positions.min_mm, self.positions.max_mm, 201)
+        if float(np.min(section_radius_difference(self, grid))) <= 0:
             raise DesignError("positions.min_mm", self.positions.min_mm, "the radius difference must stay positive")
+        if self.drive.arrangement == "end_face":
+            self._check_disc()
+        delta = drive_contact(self, grid).radius_difference_mm
+        if not (np.all(delta > 0) or np.all(delta < 0)):
+            raise DesignError("positions.min_mm", self.positions.min_mm,
+                              f"the {self.drive.arrangement} drive's radius difference changes sign over the "
+                              "control range (its ratio passes through infinity)")
         if self.generator.kind == "planetary":
             # the cone contact moves monotonically: the ends of travel bound both radii
             generator_stage(self, (self.positions.min_mm, self.positions.max_mm))
+
+    def _check_disc(self) -> None:
+        """The end-face disc: clamped at r0, it must not reach the axis, and its inner face
+        must stay a face (the arc's centre offset within the neutral radius)."""
+        f = self.flexspline
+        if f.arc_centre_offset_mm + f.arc_radius_mm >= f.neutral_radius_mm:
+            raise DesignError("flexspline.arc_centre_offset_mm", f.arc_centre_offset_mm,
+                              "with arc_radius_mm must stay below neutral_radius_mm for the end-face disc")
+
+    @property
+    def arrangement(self) -> Arrangement:
+        """The arrangement map of the working section (``drive.arrangement``)."""
+        return Arrangement(self.drive.arrangement, self.flexspline.neutral_radius_mm)
 
     @property
     def alpha(self) -> float:
@@ -333,22 +367,37 @@ def tilt_angle(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
     return d.alpha - u
 
 
-def contact_state(d: HarmonicDesign, a: ArrayLike) -> dict[str, NDArray[np.float64]]:
-    """beta, phi (rad), contact radius r_c, cone radius R_c, Delta (mm), ratio, vectorised."""
+def drive_contact(d: HarmonicDesign, a: ArrayLike) -> SectionContact:
+    """The contact at positions a (mm) in the drive frame of the design's arrangement
+    (:func:`prs_geom.harmonic.arrangement.section_contact`)."""
     f = d.flexspline
+    return section_contact(d.arrangement, tilt_angle(d, a), d.alpha, d.x_s, f.arc_centre_offset_mm,
+                           f.arc_radius_mm)
+
+
+def contact_state(d: HarmonicDesign, a: ArrayLike) -> dict[str, NDArray[np.float64]]:
+    """beta, phi (rad), and in the drive frame of the arrangement: the flexspline's radius at
+    the contact r_c (the material point, undeformed), the circular spline's R_c, Delta = R_c -
+    r_c (mm), the flexspline's rolling radius (mm) and the ratio |r_f / Delta|, vectorised.
+    For the radial inner-wave drive these are the section's own values (module docstring)."""
     beta = tilt_angle(d, a)
-    phi = d.alpha - beta
-    r0, cs, rs = f.neutral_radius_mm, f.arc_centre_offset_mm, f.arc_radius_mm
-    r_c = r0 - cs + rs * np.cos(phi)
-    R_c = r0 + d.x_s * np.sin(beta) - cs * np.cos(beta) + rs * math.cos(d.alpha)
-    delta = R_c - r_c
-    with np.errstate(divide="ignore"):
-        ratio = r0 / delta
-    return {"a_mm": np.asarray(a, dtype=np.float64), "beta_rad": beta, "phi_rad": phi,
-            "contact_radius_mm": r_c, "cone_radius_mm": R_c, "radius_difference_mm": delta, "ratio": ratio}
+    c = drive_contact(d, a)
+    return {"a_mm": np.asarray(a, dtype=np.float64), "beta_rad": beta, "phi_rad": d.alpha - beta,
+            "contact_radius_mm": c.material_rho_mm, "cone_radius_mm": c.contact_rho_mm,
+            "radius_difference_mm": c.radius_difference_mm,
+            "rolling_radius_mm": c.flexspline_rolling_radius_mm, "ratio": c.ratio}
+
+
+def section_radius_difference(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    """Delta (mm) of the working section in its own frame (the radial inner-wave drive's):
+    positive on the small-tilt branch, zero at the infinite-ratio position."""
+    f = d.flexspline
+    return section_contact(Arrangement("radial_inner", f.neutral_radius_mm), tilt_angle(d, a), d.alpha, d.x_s,
+                           f.arc_centre_offset_mm, f.arc_radius_mm).radius_difference_mm
 
 
 def radius_difference(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
+    """Delta (mm) in the drive frame (:func:`contact_state`)."""
     return contact_state(d, a)["radius_difference_mm"]
 
 
@@ -357,7 +406,8 @@ def ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
 
 
 def contact_point(d: HarmonicDesign, a: float) -> tuple[float, float]:
-    """(x, r) of the contact in the axial section, x from the flexspline bottom (mm)."""
+    """(x, r) of the contact in the working section's frame, x from the clamp A (mm); for the
+    radial inner-wave drive the axial section (x from the flexspline bottom)."""
     f = d.flexspline
     beta = float(tilt_angle(d, a))
     cx = d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta)
@@ -371,7 +421,7 @@ def infinite_ratio_position(d: HarmonicDesign) -> float | None:
     amp = math.hypot(d.x_s, f.arc_centre_offset_mm)
     a_hi = d.a0 + (amp - f.arc_radius_mm) / math.sin(d.alpha) - 1e-9
     a_lo = d.a0
-    g = lambda x: float(radius_difference(d, x))  # noqa: E731
+    g = lambda x: float(section_radius_difference(d, x))  # noqa: E731
     if g(a_lo) <= 0 or g(a_hi) > 0:
         return None
     return optimize.brentq(g, a_lo, a_hi, xtol=1e-13)
@@ -429,13 +479,15 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
     if a_values is None:
         a_values = table_positions(d)
     st = contact_state(d, a_values)
-    r0 = d.flexspline.neutral_radius_mm
+    r_f = st["rolling_radius_mm"]
     delta = st["radius_difference_mm"]
-    signed = {m: harmonic_ratio(r0, r0 + delta, m) for m in FIXED_MEMBERS}
+    signed = {m: harmonic_ratio(r_f, r_f + delta, m) for m in FIXED_MEMBERS}
     grades = tolerance_grade(delta, 2.0 * st["contact_radius_mm"])
     staged = stages_in_series(signed[d.drive.fixed_member], d.drive.stages)
     load = drive_load(d, st)
     turns, per_degree = adjusting(d, st["a_mm"])
+    # + 0.0: the end face's first travel is -0.0, printed as such
+    travel = d.arrangement.face_travel(st["a_mm"], d.positions.min_mm, math.tan(d.alpha)) + 0.0
     planet = [{} for _ in range(len(st["a_mm"]))]
     if d.generator.kind == "planetary":
         p = generator_stage(d, st["a_mm"])
@@ -451,6 +503,7 @@ def ratio_table(d: HarmonicDesign, a_values: ArrayLike | None = None) -> list[di
              "ratio_flexspline_fixed": float(signed["flexspline"][k]),
              "ratio_all_stages": float(staged[k]),
              "it_grade": grades[k],
+             "circular_spline_travel_mm": float(travel[k]),
              "adjusting_turns": float(turns[k]), "ratio_change_per_degree": float(per_degree[k]),
              "output_torque_nm": float(load.output_torque_nm[k]), "input_torque_nm": float(load.input_torque_nm[k]),
              "contact_pressure_mpa": float(load.max_pressure_mpa[k]),
@@ -484,8 +537,9 @@ def stages_in_series(stage_ratio: ArrayLike, stages: int) -> NDArray[np.float64]
 def design_ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
     """The signed ratio (generator over output speed) of the design's fixed member
     (``drive.fixed_member``) at positions a (mm)."""
-    r0 = d.flexspline.neutral_radius_mm
-    return harmonic_ratio(r0, r0 + radius_difference(d, a), d.drive.fixed_member)
+    c = drive_contact(d, a)
+    r_f = c.flexspline_rolling_radius_mm
+    return harmonic_ratio(r_f, r_f + c.radius_difference_mm, d.drive.fixed_member)
 
 
 def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
@@ -493,19 +547,36 @@ def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
     (:func:`contact_state`), for the design's pressing force, friction, safety factor and
     flexspline material (:func:`prs_geom.harmonic.drive.contact_load`)."""
     dr = d.drive
-    return contact_load(d.alpha, d.flexspline.arc_radius_mm, d.flexspline.neutral_radius_mm,
+    kind = d.drive.arrangement
+    half_angle, curvature = d.alpha, None
+    if kind != "radial_inner":
+        r_m, r_c = state["contact_radius_mm"], state["cone_radius_mm"]
+        delta = np.abs(state["radius_difference_mm"])
+        if kind == "radial_outer":
+            # concave flexspline (its inner face, flattened at the major axis by 3 Delta / r0^2)
+            # on the convex outer wall: the same sum as the inner-wave drive's, mirrored
+            curvature = math.cos(d.alpha) * (1.0 / r_c - 1.0 / r_m + 3.0 * delta / d.flexspline.neutral_radius_mm ** 2)
+        else:
+            # the face's half-angle about the axis is 90 deg - alpha: its circumferential normal
+            # curvature sin(alpha) / rho; the rim's axial wave W cos(2 theta) adds 4 W / rho^2
+            half_angle = 0.5 * math.pi - d.alpha
+            wave = (r_m - d.flexspline.neutral_radius_mm) * np.abs(np.sin(state["beta_rad"]))
+            curvature = np.abs(math.sin(d.alpha) * (1.0 / r_c - 1.0 / r_m)) + 4.0 * wave / r_m ** 2
+    return contact_load(half_angle, d.flexspline.arc_radius_mm, d.flexspline.neutral_radius_mm,
                         state["contact_radius_mm"], state["cone_radius_mm"], state["radius_difference_mm"],
                         design_ratio(d, state["a_mm"]), dr.pressing_force_n, dr.friction_coefficient,
-                        dr.slip_safety_factor, FLEXSPLINE_MATERIALS[dr.flexspline_material])
+                        dr.slip_safety_factor, FLEXSPLINE_MATERIALS[dr.flexspline_material], curvature)
 
 
 def adjusting(d: HarmonicDesign, a: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(turns of the adjusting input from positions.min_mm, change of the design's signed
     ratio per degree of the adjusting input) at positions a (mm). The derivative is a central
     difference of the closed-form ratio with a step of 1e-6 mm (relative error about 1e-6
-    where the ratio's curvature is largest)."""
+    where the ratio's curvature is largest). The mechanism moves the circular spline along
+    the axis: |d(travel) / da| is 1 for the radial drives and tan(alpha) for the end face
+    (:meth:`prs_geom.harmonic.arrangement.Arrangement.travel_per_position`)."""
     a = np.asarray(a, dtype=np.float64)
-    travel = d.drive.adjusting_travel_per_turn_mm
+    travel = d.drive.adjusting_travel_per_turn_mm / d.arrangement.travel_per_position(math.tan(d.alpha))
     h = 1e-6
     hi = np.minimum(a + h, d.positions.max_mm)
     lo = np.maximum(a - h, d.positions.min_mm)
@@ -515,9 +586,42 @@ def adjusting(d: HarmonicDesign, a: ArrayLike) -> tuple[NDArray[np.float64], NDA
 
 def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
     f = d.flexspline
+    if d.drive.arrangement == "end_face":
+        return {key: _disc_strength_limit(d, mat) for key, mat in FLEXSPLINE_MATERIALS.items()}
     lo, hi = (float(radius_difference(d, a)) for a in (d.positions.min_mm, d.positions.max_mm))
     return {key: strength_limit(mat, f.neutral_radius_mm, f.wall_thickness_mm, lo, hi)
             for key, mat in FLEXSPLINE_MATERIALS.items()}
+
+
+def flexspline_stress(d: HarmonicDesign, a: ArrayLike, mat: Any) -> NDArray[np.float64]:
+    """The flexspline's largest bending stress (MPa) at positions a (mm) for material ``mat``:
+    the thin ring ovalised by Delta (radial drives,
+    :func:`prs_geom.harmonic.drive.flexspline_bending_stress`) or the disc's rim bent out of
+    its plane by W = L sin(beta) (end face, :func:`prs_geom.harmonic.drive.disc_wave_stress`)."""
+    f = d.flexspline
+    if d.arrangement.is_disc:
+        return disc_wave_stress(f.length_mm * np.sin(tilt_angle(d, a)), f.neutral_radius_mm + f.length_mm,
+                                f.wall_thickness_mm, mat.youngs_modulus_mpa)
+    return flexspline_bending_stress(radius_difference(d, a), f.neutral_radius_mm, f.wall_thickness_mm,
+                                     mat.youngs_modulus_mpa)
+
+
+def _disc_strength_limit(d: HarmonicDesign, mat: Any) -> StrengthLimit:
+    """The end-face disc's strength limit: its rim (radius r0 + L) carries the axial wave
+    W = L sin(beta) (:func:`prs_geom.harmonic.drive.disc_wave_stress`); the largest allowed
+    tilt gives the smallest ratio through the section's contact at that tilt."""
+    f = d.flexspline
+    rim = f.neutral_radius_mm + f.length_mm
+    per_wave = float(disc_wave_stress(1.0, rim, f.wall_thickness_mm, mat.youngs_modulus_mpa))
+    s_beta = min(1.0, mat.allowed_bending_stress_mpa / per_wave / f.length_mm)
+    limit = section_contact(d.arrangement, math.asin(s_beta), d.alpha, d.x_s, f.arc_centre_offset_mm,
+                            f.arc_radius_mm)
+    ends = drive_contact(d, (d.positions.min_mm, d.positions.max_mm))
+    stress = flexspline_stress(d, (d.positions.min_mm, d.positions.max_mm), mat)
+    i_min = float(limit.ratio)
+    i_lo, i_hi = (float(v) for v in ends.ratio)
+    return StrengthLimit(mat, float(abs(limit.radius_difference_mm)), i_min, float(stress[0]), float(stress[1]),
+                         i_hi / max(i_lo, i_min), i_lo >= i_min)
 
 
 def strength_warnings(d: HarmonicDesign) -> list[str]:
@@ -544,10 +648,13 @@ def drive_section(d: HarmonicDesign, rows: list[dict[str, Any]] | None = None) -
     first, last = rows[0], rows[-1]
     signed = f"ratio_{dr.fixed_member}_fixed"
     valid = [r["a_mm"] for r in rows if r["hertz_valid"]]
-    return {"fixed_member": dr.fixed_member, "output": "flexspline" if dr.fixed_member == "circular_spline"
+    half_angle = 0.5 * math.pi - d.alpha if dr.arrangement == "end_face" else d.alpha
+    return {"arrangement": dr.arrangement, "arrangement_description": ARRANGEMENTS[dr.arrangement],
+            "fixed_member": dr.fixed_member, "output": "flexspline" if dr.fixed_member == "circular_spline"
             else "circular_spline", "ratio_at_min_position": first[signed], "ratio_at_max_position": last[signed],
             "flexspline_material": dr.flexspline_material, "pressing_force_n": dr.pressing_force_n,
-            "normal_force_n": dr.pressing_force_n / math.sin(d.alpha), "normal_force_factor": 1.0 / math.sin(d.alpha),
+            "normal_force_n": dr.pressing_force_n / math.sin(half_angle),
+            "normal_force_factor": 1.0 / math.sin(half_angle),
             "friction_coefficient": dr.friction_coefficient, "slip_safety_factor": dr.slip_safety_factor,
             "output_torque_nm": first["output_torque_nm"],
             "input_torque_at_max_position_nm": last["input_torque_nm"],
@@ -591,9 +698,9 @@ def harmonic_report(d: HarmonicDesign, a_values: ArrayLike | None = None) -> dic
         "tolerance": [tolerance_for_ratio(d, i) for i in (100.0, 500.0, rng["ratio_max"])],
         "strength": strength_section(d),
         "drive": drive_section(d, table if a_values is None else None),
-        "assumptions": "rigid generatrix tilting about the flexspline bottom; major-axis section only; "
-                       "radial inner-wave drive with the conical bore in the circular spline (the outer-wave, "
-                       "end-face and sealed arrangements are not modelled yet; multi-stage drives as identical "
-                       "stages in series); "
+        "arrangement": d.drive.arrangement,
+        "assumptions": "rigid generatrix tilting about the flexspline's clamp; major-axis section only; "
+                       f"{ARRANGEMENTS[d.drive.arrangement]}; not modelled: {NOT_MODELLED}; multi-stage drives "
+                       "as identical stages in series; "
                        "see prs_geom/harmonic/model.py and docs/theory/harmonic.md",
     }

@@ -176,6 +176,11 @@ def _checks_html(report: dict[str, Any]) -> str:
              Q(c["wave_generator_clearance_min_mm"], k + "wave_generator_clearance_min_mm")],
             ["exact wave generator clearance, max (mm)",
              Q(c["wave_generator_clearance_max_mm"], k + "wave_generator_clearance_max_mm")],
+            ["ratio measured on the meshes", Q(c["measured_ratio"]["ratio"], k + "measured_ratio.ratio")],
+            ["ratio of the model", Q(c["measured_ratio"]["model_ratio"], k + "measured_ratio.model_ratio")],
+            ["measured / model - 1" + ("" if c["measured_ratio"]["resolved"] else
+                                       " (Delta below 100 chord tolerances: not resolved by the meshes)"),
+             Q(c["measured_ratio"]["relative_difference"], k + "measured_ratio.relative_difference")],
         ], ["check", "value"], table_id="assembly-checks"))
         out.append(table([[" - ".join(p["pair"]), p["volume_mm3"], p["mean_thickness_mm"], p["status"]]
                           for p in it["pairs"]],
