@@ -740,7 +740,9 @@ def harmonic_stage(ctx: BuildContext) -> None:
     rows = []
     tol = d.mesh.chord_tolerance_mm
     for name, mesh, prof, arc_bound in (
-            ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d), 0.0),
+            # the sealed drive's ring carries the working arc, sampled at a quarter of the tolerance
+            ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d),
+             0.25 * tol if d.drive.arrangement == "sealed" else 0.0),
             ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
         write_stl(mesh, ctx.add_file(f"{name}.stl"), stl_header(name, design_hash(d)))
         rev = revolve_deviation(mesh, prof)

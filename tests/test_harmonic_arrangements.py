@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +20,15 @@ from prs_geom.model.errors import DesignError
 POSITIONS = (42.0, 58.0, 74.0)
 
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
 def arranged(kind: str, **changes) -> pg.HarmonicDesign:
+    """The published section in arrangement ``kind``; the sealed drive from its example."""
+    if kind == "sealed":
+        from prs_geom.pipeline import load_any_design
+
+        return load_any_design(EXAMPLES / "harmonic-sealed.toml")
     d = pg.HarmonicDesign()
     return dataclasses.replace(d, drive=dataclasses.replace(d.drive, arrangement=kind, **changes))
 
@@ -154,13 +163,13 @@ def test_strength_per_arrangement():
         2 * 206e3 * f.wall_thickness_mm * f.length_mm * math.sin(float(tilt_angle(d, 42.0))) / rim ** 2, rel=1e-12)
 
 
-@pytest.mark.parametrize("kind", ["radial_inner", "radial_outer", "end_face"])
+@pytest.mark.parametrize("kind", ["radial_inner", "radial_outer", "end_face", "sealed"])
 def test_placed_parts_never_overlap_at_three_positions(kind):
     """Each arrangement's placed meshes at the ends and the middle of the range: closed,
     within their chord tolerance, the parts clear or touching (never interfering), the
     flexspline's mesh on the model's contact point."""
     d = arranged(kind)
-    for a in POSITIONS:
+    for a in (d.positions.min_mm, 0.5 * (d.positions.min_mm + d.positions.max_mm), d.positions.max_mm):
         asm = build_assembly(d, a)
         checks = assembly_checks(asm)
         assert not checks["interference"]["found"], (kind, a, checks["interference"])
@@ -176,6 +185,7 @@ def test_placed_parts_never_overlap_at_three_positions(kind):
     ("radial_inner", 0.01, (42.0, 50.0, 58.0)),
     ("radial_outer", 0.01, (42.0, 50.0, 58.0)),
     ("end_face", 0.0015, (42.0,)),
+    ("sealed", 0.01, (47.0, 55.0, 62.0)),
 ])
 def test_ratio_measured_on_the_meshes_is_the_model_ratio(kind, tol, positions):
     """Where Delta is at least 100 chord tolerances, the ratio measured on the placed meshes
@@ -190,12 +200,47 @@ def test_ratio_measured_on_the_meshes_is_the_model_ratio(kind, tol, positions):
 
 
 def test_unknown_arrangement_is_refused_with_the_rule():
-    with pytest.raises(DesignError, match="sealed drive is not modelled"):
-        arranged("sealed")
+    with pytest.raises(DesignError, match="must be one of radial_inner, radial_outer, end_face, sealed"):
+        arranged("conical_both")
+
+
+def test_sealed_contact_by_an_independent_construction():
+    """The sealed drive built with rotation matrices: the conical flexspline's neutral line
+    from A = (z 0, rho r0) at alpha_f, turned by the tilt about A; its outer wall t / 2 off it
+    touches the working arc (centre at (a, rho_C)): the centre's distance from the turned
+    outer line is r_s (1e-9 mm). Delta is the radial shift of the contact's material point
+    under the turn; Delta = 0 exactly at the infinite-ratio position (beta = 0 there); with
+    the flexspline fixed (the bellows) the circular spline turns with the generator."""
+    from prs_geom.harmonic.model import infinite_ratio_position
+
+    d = arranged("sealed")
+    f, c = d.flexspline, d.circular_spline
+    A = np.array([0.0, f.neutral_radius_mm])           # (z, rho)
+    for a in (47.0, 60.0, 75.0, 80.0):
+        beta = float(tilt_angle(d, a))
+        u = _turn(A + [math.cos(d.alpha), math.sin(d.alpha)], A, beta) - A     # the turned generatrix
+        n = np.array([-u[1], u[0]])
+        outer_point = A + 0.5 * f.wall_thickness_mm * n
+        centre = np.array([a, c.arc_centre_radius_mm])
+        assert float(np.dot(centre - outer_point, n)) == pytest.approx(c.arc_radius_mm, abs=1e-9)
+        contact = centre - c.arc_radius_mm * n
+        material = _turn(contact, A, -beta)
+        got = drive_contact(d, a)
+        assert float(got.contact_z_mm) == pytest.approx(contact[0], abs=1e-9)
+        assert float(got.radius_difference_mm) == pytest.approx(contact[1] - material[1], abs=1e-9)
+        assert float(got.radius_difference_mm) > 0
+    a_inf = infinite_ratio_position(d)
+    assert float(tilt_angle(d, a_inf)) == pytest.approx(0.0, abs=1e-12)
+    assert float(drive_contact(d, a_inf).radius_difference_mm) == pytest.approx(0.0, abs=1e-12)
+    rows = ratio_table(d, (47.0, 80.0))
+    assert all(r["ratio_flexspline_fixed"] > 0 > r["ratio_circular_spline_fixed"] for r in rows)
+    # a flexspline without a cone is refused for the sealed drive, naming the field
+    with pytest.raises(DesignError, match="cone_half_angle_deg"):
+        dataclasses.replace(d, flexspline=dataclasses.replace(f, cone_half_angle_deg=0.0))
 
 
 def test_signed_ratio_helper_agrees_for_every_arrangement():
-    for kind in ("radial_inner", "radial_outer", "end_face"):
+    for kind in ("radial_inner", "radial_outer", "end_face", "sealed"):
         d = arranged(kind)
         c = drive_contact(d, 50.0)
         r_f = float(c.flexspline_rolling_radius_mm)

@@ -32,8 +32,21 @@ length; rho of the undeformed contact point for the disc). The deformation of ev
 is the turn about A by ``sense * beta(theta)`` in the drive frame
 (:meth:`Arrangement.tilt_sense`).
 
-The sealed drive (the conical flexspline moving axially on a bellows, the arc on the circular
-spline) puts the cone on the tilting member and is not one of these maps: it is not modelled.
+* ``sealed`` (the source's sealed drive): the cone is on the flexspline and the contact arc on
+  the circular spline, so it is not a map of the published section but a section of its own
+  (:func:`sealed_tilt`, :func:`sealed_contact`), drawn in the drive frame directly (z = x,
+  rho = r). The flexspline is a conical cup (half-angle alpha_f, neutral radius r0 at its bottom
+  A), joined to the housing by a sealing wall on a bellows so that it moves axially without
+  turning; the circular spline's bore carries the working arc (radius r_s, centre at radius
+  rho_C) and is the output. Position a is the axial distance from A to the arc's centre. The
+  generator tilts the cone's generatrix about A by beta until its outer surface (t / 2 off the
+  neutral line) touches the arc:
+
+      -a sin(alpha_f + beta) + (rho_C - r0) cos(alpha_f + beta) = t / 2 + r_s,
+
+  so beta = arccos((t/2 + r_s) / hypot(a, rho_C - r0)) - atan2(a, rho_C - r0) - alpha_f.
+  Moving the cone under the fixed arc changes the flexspline's radius under it, hence Delta;
+  Delta = 0 (infinite ratio) where the untilted cone touches the arc.
 """
 from __future__ import annotations
 
@@ -43,7 +56,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ARRANGEMENTS", "NOT_MODELLED", "Arrangement", "SectionContact", "section_contact"]
+__all__ = ["ARRANGEMENTS", "NOT_MODELLED", "Arrangement", "SectionContact", "section_contact", "sealed_tilt",
+           "sealed_contact", "sealed_infinite_position"]
 
 #: The arrangements the tool models, with one line each (report.json, report.html, docs).
 ARRANGEMENTS: dict[str, str] = {
@@ -53,11 +67,12 @@ ARRANGEMENTS: dict[str, str] = {
                     "the flexspline (the section mirrored about the neutral layer)",
     "end_face": "end-face (axial) drive: the flexspline a disc clamped at r0, its rim pushed axially onto the "
                 "circular spline's conical face, which slides along the axis (the section turned by 90 degrees)",
+    "sealed": "sealed drive: conical flexspline moving axially on a bellows-mounted sealing wall, the working arc "
+              "in the circular spline's bore (the output); the cone is on the flexspline",
 }
-#: Arrangements of the source that the tool does not model, with why.
-NOT_MODELLED = ("sealed drive (conical flexspline on a bellows, arc on the circular spline, output through the "
-                "circular spline): the cone is on the tilting member, which no rigid map of the working section "
-                "gives; stages of different geometry; the working part as a separate insert")
+#: Parts of the source's family that the tool does not model.
+NOT_MODELLED = ("the sealing wall and bellows of the sealed drive as parts (their stiffness and the axial "
+                "travel they allow); stages of different geometry; the working part as a separate insert")
 
 
 @dataclass(frozen=True)
@@ -86,7 +101,7 @@ class Arrangement:
         """+1 or -1: the section's tilt beta turns a drive meridian by ``tilt_sense * beta``
         about A (positive = the open end away from the axis, as in :func:`turn_about_clamp`).
         The mirror and the quarter turn both reverse the sense of rotation in (rho, z)."""
-        return 1.0 if self.kind == "radial_inner" else -1.0
+        return 1.0 if self.kind in ("radial_inner", "sealed") else -1.0
 
     @property
     def is_disc(self) -> bool:
@@ -98,7 +113,7 @@ class Arrangement:
         x = np.asarray(x, dtype=np.float64)
         r = np.asarray(r, dtype=np.float64)
         r0 = self.neutral_radius_mm
-        if self.kind == "radial_inner":
+        if self.kind in ("radial_inner", "sealed"):
             return r + 0.0 * x, x + 0.0 * r
         if self.kind == "radial_outer":
             return 2.0 * r0 - r + 0.0 * x, x + 0.0 * r
@@ -109,7 +124,7 @@ class Arrangement:
         rho = np.asarray(rho, dtype=np.float64)
         z = np.asarray(z, dtype=np.float64)
         r0 = self.neutral_radius_mm
-        if self.kind == "radial_inner":
+        if self.kind in ("radial_inner", "sealed"):
             return z + 0.0 * rho, rho + 0.0 * z
         if self.kind == "radial_outer":
             return z + 0.0 * rho, 2.0 * r0 - rho + 0.0 * z
@@ -178,6 +193,48 @@ def section_contact(arrangement: Arrangement, beta: ArrayLike, alpha: float, arc
     rho_m, z_m = arrangement.to_drive(xs - rs * np.sin(phi), r0 - cs + rs * np.cos(phi))
     delta = rho_c - rho_m
     r_f = rho_m if arrangement.is_disc else np.full_like(delta, r0)
+    with np.errstate(divide="ignore"):
+        ratio = np.abs(r_f / delta)
+    return SectionContact(rho_c, z_c, rho_m, z_m, delta, r_f, ratio)
+
+
+def sealed_tilt(a: ArrayLike, neutral_radius_mm: float, wall_mm: float, cone_half_angle_rad: float,
+                arc_centre_radius_mm: float, arc_radius_mm: float) -> NDArray[np.float64]:
+    """The sealed drive's tilt beta (rad) at positions a (mm), closed form of the tangency in
+    the module docstring (the small-tilt branch). NaN where the arc is out of reach."""
+    a = np.asarray(a, dtype=np.float64)
+    h = arc_centre_radius_mm - neutral_radius_mm
+    with np.errstate(invalid="ignore"):
+        return (np.arccos((0.5 * wall_mm + arc_radius_mm) / np.hypot(a, h)) - np.arctan2(a, h)
+                - cone_half_angle_rad)
+
+
+def sealed_infinite_position(neutral_radius_mm: float, wall_mm: float, cone_half_angle_rad: float,
+                             arc_centre_radius_mm: float, arc_radius_mm: float) -> float:
+    """a (mm) where the untilted cone touches the arc (beta = 0, Delta = 0)."""
+    h = arc_centre_radius_mm - neutral_radius_mm
+    return (h * math.cos(cone_half_angle_rad) - 0.5 * wall_mm - arc_radius_mm) / math.sin(cone_half_angle_rad)
+
+
+def sealed_contact(a: ArrayLike, beta: ArrayLike, neutral_radius_mm: float, wall_mm: float,
+                   cone_half_angle_rad: float, arc_centre_radius_mm: float, arc_radius_mm: float) -> SectionContact:
+    """The sealed drive's contact in the drive frame at positions a (mm) and tilts beta (rad):
+    the contact point r_s from the arc's centre (a, rho_C) toward the tilted cone (along its
+    normal), the same material point of the flexspline turned back by -beta about
+    A = (0, r0); Delta = rho(contact) - rho(material), the rolling radius the neutral layer's
+    radius there (rho(material) - (t / 2) cos(alpha_f))."""
+    a = np.asarray(a, dtype=np.float64)
+    beta = np.asarray(beta, dtype=np.float64)
+    r0 = neutral_radius_mm
+    ang = cone_half_angle_rad + beta
+    z_c = a + arc_radius_mm * np.sin(ang)
+    rho_c = arc_centre_radius_mm - arc_radius_mm * np.cos(ang)
+    # turn back about A = (z 0, rho r0)
+    c, s = np.cos(beta), np.sin(beta)
+    z_m = z_c * c + (rho_c - r0) * s
+    rho_m = r0 - z_c * s + (rho_c - r0) * c
+    delta = rho_c - rho_m
+    r_f = rho_m - 0.5 * wall_mm * math.cos(cone_half_angle_rad)
     with np.errstate(divide="ignore"):
         ratio = np.abs(r_f / delta)
     return SectionContact(rho_c, z_c, rho_m, z_m, delta, r_f, ratio)

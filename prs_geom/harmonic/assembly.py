@@ -92,7 +92,9 @@ def circular_spline_mesh(d: HarmonicDesign, tol: float | None = None) -> trimesh
     prof = circular_spline_profile(d)
     closed = np.concatenate([prof, prof[:1]])
     tol = d.mesh.chord_tolerance_mm if tol is None else tol
-    return trimesh.creation.revolve(closed, sections=revolution_sections(float(prof[:, 0].max()), tol))
+    # the sealed drive's ridge arc takes a quarter of the tolerance (:func:`_ridged_ring`)
+    rev = 0.75 * tol if d.drive.arrangement == "sealed" else tol
+    return trimesh.creation.revolve(closed, sections=revolution_sections(float(prof[:, 0].max()), rev))
 
 
 def flexspline_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarray:
@@ -103,10 +105,15 @@ def flexspline_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarra
     bottom joined on the outer wall. End face: the disc from its clamp at r0 round the rim
     arc and back (no point on the axis). ``tol``: chord tolerance (mm; default the
     design's), half of it for the arc's chords."""
-    sec = section_profile(d, tol)
     arr = d.arrangement
     f = d.flexspline
     r0, t = f.neutral_radius_mm, f.wall_thickness_mm
+    if arr.kind == "sealed":
+        # the conical cup: walls t / 2 either side of the neutral line from A at alpha_f
+        off, slope, L = 0.5 * t / math.cos(d.alpha), math.tan(d.alpha), f.length_mm
+        return np.array([[0.0, 0.0], [r0 + off, 0.0], [r0 + off + L * slope, L], [r0 - off + L * slope, L],
+                         [r0 - off + t * slope, t], [0.0, t]])
+    sec = section_profile(d, tol)
     if arr.kind == "radial_inner":
         return sec
     body = sec[1:-1]                                  # (r, x): (ro, 0), arc ..., (ri, t)
@@ -150,14 +157,31 @@ def circular_spline_profile(d: HarmonicDesign) -> np.ndarray:
     End face: the section's ring at the reference position :func:`face_reference_position`
     turned into the drive (a ring whose conical face looks at the disc's rim)."""
     c = d.circular_spline
+    arr = d.arrangement
+    if arr.kind == "sealed":
+        return _ridged_ring(d)
     ring = np.array([[c.bore_small_radius_mm, 0.0], [c.outer_radius_mm, 0.0],
                      [c.outer_radius_mm, c.bore_length_mm], [c.bore_large_radius_mm, c.bore_length_mm]])
-    arr = d.arrangement
     if arr.kind == "radial_inner":
         return ring
     x0 = face_reference_position(d) if arr.is_disc else 0.0
     rho, z = arr.to_drive(ring[:, 1] + x0, ring[:, 0])
     return np.column_stack([rho, z])[::-1].copy()
+
+
+def _ridged_ring(d: HarmonicDesign) -> np.ndarray:
+    """The sealed drive's circular spline (own frame, mm): a ring with a cylindrical bore
+    (bore_small_radius_mm) over 0 .. H whose middle carries the working arc as a ridge (centre
+    at z = H / 2, radius arc_centre_radius_mm), counter-clockwise; the arc sampled with half
+    the chord tolerance as sagitta."""
+    c = d.circular_spline
+    H, b, rs, rc = c.bore_length_mm, c.bore_small_radius_mm, c.arc_radius_mm, c.arc_centre_radius_mm
+    half = math.acos((rc - b) / rs)                  # the arc's angle either side of the axis's normal
+    dth = 2 * math.acos(1 - 0.25 * d.mesh.chord_tolerance_mm / rs)
+    th = np.linspace(half, -half, max(8, int(math.ceil(2 * half / dth)) + 1))
+    # from the ridge's upper end (z > H/2) down to its lower end, innermost point at th = 0
+    arc = np.column_stack([rc - rs * np.cos(th), 0.5 * H + rs * np.sin(th)])
+    return np.concatenate([[[b, 0.0], [c.outer_radius_mm, 0.0], [c.outer_radius_mm, H], [b, H]], arc])
 
 
 def face_reference_position(d: HarmonicDesign) -> float:
@@ -172,6 +196,8 @@ def circular_spline_placement(d: HarmonicDesign, a: float) -> float:
     radial drives, the face travel from :func:`face_reference_position` for the end face."""
     if d.arrangement.is_disc:
         return float(d.arrangement.face_travel(a, face_reference_position(d), math.tan(d.alpha)))
+    if d.drive.arrangement == "sealed":
+        return float(a) - 0.5 * d.circular_spline.bore_length_mm
     return float(a)
 
 
@@ -227,11 +253,12 @@ def inner_wall_radius(d: HarmonicDesign, beta: ArrayLike, z: ArrayLike) -> NDArr
     """Radius (mm) of the tilted inner wall line (undeformed radius r0 - t/2) at height z
     (mm, assembly frame) in a meridian tilted by ``beta`` (rad); broadcasts."""
     f = d.flexspline
-    beta = np.asarray(beta, dtype=np.float64)
+    # the sealed drive's wall is a cone of half-angle alpha_f: its line turns to alpha_f + beta
+    ang = np.asarray(beta, dtype=np.float64) + (d.alpha if d.drive.arrangement == "sealed" else 0.0)
     z = np.asarray(z, dtype=np.float64)
     h = 0.5 * f.wall_thickness_mm
     # the wall's foot (r0 - t/2, 0) turns to (r0 - h cos b, h sin b); the line runs along (sin b, cos b)
-    return f.neutral_radius_mm - h * np.cos(beta) + (z - h * np.sin(beta)) * np.tan(beta)
+    return f.neutral_radius_mm - h * np.cos(ang) + (z - h * np.sin(ang)) * np.tan(ang)
 
 
 # --------------------------------------------------------------------------- wave generator
@@ -278,6 +305,9 @@ class WaveGenerator:
 def _inner_wall_top(d: HarmonicDesign) -> tuple[float, float]:
     """(r, z) (mm) of the undeformed profile's inner-wall top: where the contact arc meets
     the inner wall (the third last point of :func:`section_profile`)."""
+    if d.drive.arrangement == "sealed":
+        p = flexspline_profile(d)
+        return float(p[-3, 0]), float(p[-3, 1])
     p = section_profile(d)
     return float(p[-3, 0]), float(p[-3, 1])
 
@@ -290,11 +320,15 @@ def wave_generator(d: HarmonicDesign, a: float) -> WaveGenerator:
     t = f.wall_thickness_mm
     beta = float(tilt_angle(d, a))
     r_j, z_j = _inner_wall_top(d)
-    h = min(0.5 * f.arc_radius_mm, 0.9 * (z_j - d.x_s), 0.9 * (d.x_s - t))
+    # under the contact: the arc's centre station, or the sealed drive's contact on its cone
+    z_mid, arc = d.x_s, f.arc_radius_mm
+    if d.drive.arrangement == "sealed":
+        z_mid, arc = float(drive_contact(d, a).contact_z_mm), d.circular_spline.arc_radius_mm
+    h = min(0.5 * arc, 0.9 * (z_j - z_mid), 0.9 * (z_mid - t))
     if not h > 0:
         raise DesignError("flexspline.arc_radius_mm", f.arc_radius_mm,
                           "leaves no straight inner wall under the contact arc for the wave generator")
-    z1, z2 = d.x_s - h, d.x_s + h
+    z1, z2 = z_mid - h, z_mid + h
     # the band must stay on the straight inner wall in every meridian once tilted (|tilt| <= |beta|)
     b = np.array([-abs(beta), abs(beta)])
     top = tilt_meridian(d, r_j, z_j, b)[1].min()
@@ -598,7 +632,7 @@ def build_assembly(d: HarmonicDesign, a: float | None = None, tol: float | None 
     tol = d.mesh.chord_tolerance_mm if tol is None else float(tol)
     wg = wave_generator(d, a)
     fs = deformed_flexspline(d, a, tol)
-    if d.arrangement.kind == "radial_inner":
+    if d.arrangement.kind in ("radial_inner", "sealed"):
         generator = (wave_generator_mesh(wg, tol), _translation(wg.z_min_mm))
     else:
         generator = (mapped_generator_mesh(d, wg, tol)[0], np.eye(4))
@@ -626,6 +660,8 @@ def arc_cone_clearance(d: HarmonicDesign, a: float, theta: ArrayLike) -> NDArray
     on the arc (checked)."""
     f = d.flexspline
     beta = meridian_tilt(float(tilt_angle(d, a)), theta)
+    if d.drive.arrangement == "sealed":
+        return _sealed_clearance(d, a, beta)
     cr, cz = tilt_meridian(d, f.neutral_radius_mm - f.arc_centre_offset_mm, d.x_s, beta)
     prof = section_profile(d)
     r_c, z_c = f.neutral_radius_mm - f.arc_centre_offset_mm, d.x_s
@@ -636,6 +672,43 @@ def arc_cone_clearance(d: HarmonicDesign, a: float, theta: ArrayLike) -> NDArray
     if np.any(foot < th0) or np.any(foot > th1):
         raise ValueError("the cone's nearest point leaves the contact arc: the clearance formula does not apply")
     return cone_gap(d, np.stack([cr, cz], axis=-1), a) - f.arc_radius_mm
+
+
+def _sealed_clearance(d: HarmonicDesign, a: float, beta: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The sealed drive's exact clearance (mm) between the circular spline's working arc and
+    the flexspline's outer cone wall in meridians tilted by ``beta`` (rad): the arc centre's
+    distance from the tilted neutral line, minus t / 2 and r_s; valid while the foot of that
+    distance lies on the wall (checked)."""
+    f, c = d.flexspline, d.circular_spline
+    ang = d.alpha + beta
+    h = c.arc_centre_radius_mm - f.neutral_radius_mm
+    foot = a * np.cos(ang) + h * np.sin(ang)             # along the generatrix from A
+    if np.any(foot <= 0) or np.any(foot * np.cos(ang) >= f.length_mm):
+        raise ValueError("the arc's nearest point leaves the cone wall: the clearance formula does not apply")
+    return -a * np.sin(ang) + h * np.cos(ang) - 0.5 * f.wall_thickness_mm - c.arc_radius_mm
+
+
+def _contact_gaps(d: HarmonicDesign, fs: DeformedFlexspline, a: float) -> list[float]:
+    """Smallest signed gap (mm) of the flexspline mesh's major-axis meridians (theta = 0 and
+    pi) from the circular spline's working surface: the cone line within the ring (radial and
+    end-face drives) or the working arc (sealed drive: distance from its centre to the
+    meridian's segments minus r_s)."""
+    n = len(fs.theta)
+    c = d.circular_spline
+    gaps = []
+    for k in (0, n // 2):                   # theta = 0 and pi: the wave's two lobes
+        if d.drive.arrangement == "sealed":
+            mer = fs.meridian(k)
+            centre = np.array([c.arc_centre_radius_mm, a])
+            dist = point_segment_distance(centre, mer[:-1], mer[1:])
+            gaps.append(float(np.min(dist)) - c.arc_radius_mm)
+            continue
+        # the cone's extent along the section's generatrix: it moves with a in the radial drives
+        x_lo = face_reference_position(d) if d.arrangement.is_disc else a
+        mer = _section_meridian(d, fs.meridian(k))
+        inside = (mer[:, 1] >= x_lo) & (mer[:, 1] <= x_lo + c.bore_length_mm)
+        gaps.append(float(np.min(cone_gap(d, mer[inside], a))))
+    return gaps
 
 
 def _section_meridian(d: HarmonicDesign, mer: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -672,15 +745,7 @@ def assembly_checks(asm: HarmonicAssembly) -> dict[str, Any]:
     """
     d, a, tol = asm.design, asm.position_mm, asm.tolerance_mm
     fs = asm.flexspline
-    n = len(fs.theta)
-    c = d.circular_spline
-    gaps = []
-    # the cone's extent along the section's generatrix: it moves with a in the radial drives
-    x_lo = face_reference_position(d) if d.arrangement.is_disc else a
-    for k in (0, n // 2):                   # theta = 0 and pi: the wave's two lobes
-        mer = _section_meridian(d, fs.meridian(k))
-        inside = (mer[:, 1] >= x_lo) & (mer[:, 1] <= x_lo + c.bore_length_mm)
-        gaps.append(float(np.min(cone_gap(d, mer[inside], a))))
+    gaps = _contact_gaps(d, fs, a)
     px, pr = contact_point(d, a)
     meridian = _section_meridian(d, fs.meridian(0))
     offset = float(point_segment_distance(np.array([pr, px]), meridian[:-1], meridian[1:]).min())
@@ -771,6 +836,10 @@ def measured_ratio(asm: HarmonicAssembly) -> dict[str, Any]:
     f = d.flexspline
     if d.arrangement.is_disc:
         r_f = r
+    elif d.drive.arrangement == "sealed":
+        # the neutral layer at the material circle: half way between the cone's two walls
+        wall = f.wall_thickness_mm / math.cos(d.alpha)
+        r_f = 0.5 * (r + _mean_radius(flat, float(c.material_rho_mm) - wall, float(c.material_z_mm)))
     else:
         mid = 0.5 * d.x_s
         r_f = 0.5 * (_mean_radius(flat, f.neutral_radius_mm + f.wall_thickness_mm, mid)
@@ -793,7 +862,7 @@ def mesh_rows(asm: HarmonicAssembly) -> list[dict[str, Any]]:
     wg_mesh, _ = asm.parts["wave_generator"]
     rows = []
     d = asm.design
-    wg_dev = (wave_generator_deviation(asm.wave_generator, wg_mesh) if d.arrangement.kind == "radial_inner"
+    wg_dev = (wave_generator_deviation(asm.wave_generator, wg_mesh) if d.arrangement.kind in ("radial_inner", "sealed")
               else mapped_generator_deviation(d, asm.wave_generator, wg_mesh))
     for name, mesh, measured, bound in (
             ("flexspline", fs_mesh, flexspline_deviation(d, asm.flexspline), asm.flexspline.arc_chord_bound_mm),

@@ -143,6 +143,9 @@ def _sketch(d: HarmonicDesign, ax: Any) -> None:
     f, c = d.flexspline, d.circular_spline
     arr = d.arrangement
     a = d.positions.drawing_mm[-1]
+    if arr.kind == "sealed":
+        _sealed_sketch(d, ax, a)
+        return
     beta = float(tilt_angle(d, a))
     L, r0 = f.length_mm, f.neutral_radius_mm
 
@@ -194,6 +197,56 @@ def _sketch(d: HarmonicDesign, ax: Any) -> None:
     ax.legend(fontsize=7, loc="lower left")
 
 
+def _dxf_position_note(d: HarmonicDesign, blk: Any, a: float, beta: float) -> None:
+    """The axis line, the contact point and the position's numbers in a DXF block."""
+    f, c = d.flexspline, d.circular_spline
+    blk.add_line((-5.0, 0.0), (f.length_mm + 5.0, 0.0), dxfattribs={"layer": "CENTRE"})
+    px, pr = contact_point(d, a)
+    st = contact_state(d, a)
+    blk.add_text(f"a = {a:g} mm, beta = {math.degrees(beta):.5f} deg, contact r = {float(st['contact_radius_mm']):.4f}, "
+                 f"Delta = {float(st['radius_difference_mm']):.5f} mm, i = {float(st['ratio']):.1f}",
+                 height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, c.outer_radius_mm + 2.0))
+    blk.add_point((px, pr), dxfattribs={"layer": "ANNOTATION"})
+
+
+def _sealed_profiles(d: HarmonicDesign, a: float) -> tuple[np.ndarray, np.ndarray]:
+    """The sealed drive's half-section at position a (mm) in the drive frame, as (rho, z)
+    polygons: the flexspline's (the conical cup turned by beta about A, the major axis's
+    meridian) and the circular spline's (the ridged ring placed with its arc's centre at a)."""
+    from prs_geom.harmonic.assembly import circular_spline_placement, tilt_meridian
+
+    prof = flexspline_profile(d)
+    rho, z = tilt_meridian(d, prof[:, 0], prof[:, 1], float(tilt_angle(d, a)))
+    flex = np.column_stack([rho, z])
+    flex[[0, -1], 0] = 0.0                     # the bottom's axis points stay on the axis
+    ring = circular_spline_profile(d) + np.array([0.0, circular_spline_placement(d, a)])
+    return flex, ring
+
+
+def _sealed_sketch(d: HarmonicDesign, ax: Any, a: float) -> None:
+    """The sealed drive's sketch: the tilted conical flexspline, the ridged circular spline
+    (the output, hatched when fixed), the generator under the contact, z along the axis."""
+    flex, ring = _sealed_profiles(d, a)
+    fixed = d.drive.fixed_member
+    ax.fill(flex[:, 1], flex[:, 0], facecolor="0.85" if fixed == "flexspline" else "none", edgecolor="C0",
+            hatch="///" if fixed == "flexspline" else None, lw=1.5, label="flexspline (cone, on the bellows)")
+    ax.fill(ring[:, 1], ring[:, 0], facecolor="0.85" if fixed == "circular_spline" else "none", edgecolor="C1",
+            hatch="///" if fixed == "circular_spline" else None, lw=1.5, label="circular spline (working arc)")
+    cx, cr = contact_point(d, a)
+    ax.fill([cx - 6.0, cx + 6.0, cx + 6.0, cx - 6.0], [0.0, 0.0, d.flexspline.neutral_radius_mm - 3.0,
+                                                     d.flexspline.neutral_radius_mm - 3.0],
+            facecolor="C2", alpha=0.25, edgecolor="C2", label="wave generator (input)")
+    ax.plot([cx], [cr], "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
+    out = "flexspline" if fixed == "circular_spline" else "circular spline"
+    ax.set_title(f"sealed: {fixed.replace('_', ' ')} fixed (hatched), {out} output; flexspline cone "
+                 f"{math.degrees(d.alpha):.3f} deg", fontsize=9)
+    ax.set_xlabel("z along the axis (mm)")
+    ax.set_ylabel("distance from the axis (mm)")
+    ax.set_aspect("equal")
+    ax.set_ylim(bottom=0.0)
+    ax.legend(fontsize=7, loc="lower left")
+
+
 def write_dxf(d: HarmonicDesign, path: Path) -> None:
     """Axial section (major axis) at each position of ``positions.drawing_mm``: the tilted
     flexspline generatrix (LINE, neutral layer) with its contact ARC, and the cone bore
@@ -209,6 +262,14 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
         beta = float(tilt_angle(d, a))
         blk = doc.blocks.new(f"POSITION_{k}")
         r0 = f.neutral_radius_mm
+        if d.drive.arrangement == "sealed":
+            # the half-section's outlines, x along the axis, r up (LWPOLYLINE each)
+            for poly in _sealed_profiles(d, a):
+                blk.add_lwpolyline([(float(q[1]), float(q[0])) for q in poly], close=True,
+                                   dxfattribs={"layer": "PROFILE"})
+            _dxf_position_note(d, blk, a, beta)
+            msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
+            continue
         g = np.array([math.cos(beta), math.sin(beta)])
         nrm = np.array([-math.sin(beta), math.cos(beta)])
         A = np.array([0.0, r0])
@@ -219,13 +280,7 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
         blk.add_arc(tuple(C), f.arc_radius_mm, ang - 30.0, ang + 30.0, dxfattribs={"layer": "PROFILE"})
         blk.add_line((a, c.bore_small_radius_mm), (a + c.bore_length_mm, c.bore_large_radius_mm),
                      dxfattribs={"layer": "PROFILE"})
-        blk.add_line((-5.0, 0.0), (f.length_mm + 5.0, 0.0), dxfattribs={"layer": "CENTRE"})
-        px, pr = contact_point(d, a)
-        st = contact_state(d, a)
-        blk.add_text(f"a = {a:g} mm, beta = {math.degrees(beta):.5f} deg, contact r = {float(st['contact_radius_mm']):.4f}, "
-                     f"Delta = {float(st['radius_difference_mm']):.5f} mm, i = {float(st['ratio']):.1f}",
-                     height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, c.outer_radius_mm + 2.0))
-        blk.add_point((px, pr), dxfattribs={"layer": "ANNOTATION"})
+        _dxf_position_note(d, blk, a, beta)
         msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
     msp.add_text(f"{dxf_text(d.name)}: harmonic friction drive, axial sections at {list(d.positions.drawing_mm)} mm; "
                  "units mm",

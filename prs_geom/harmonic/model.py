@@ -39,6 +39,7 @@ from scipy import optimize
 
 # the shared validators: both product lines word their errors alike
 from prs_geom.harmonic.arrangement import (ARRANGEMENTS, NOT_MODELLED, Arrangement, SectionContact,
+                                          sealed_contact, sealed_infinite_position, sealed_tilt,
                                           section_contact)
 from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, StrengthLimit, contact_load,
                                      disc_wave_stress, flexspline_bending_stress, harmonic_ratio,
@@ -62,10 +63,16 @@ class Flexspline:
     arc_radius_mm: float = 15.0
     arc_centre_offset_mm: float = 11.18
     wall_thickness_mm: float = 1.0
+    #: The sealed drive's conical flexspline: half-angle of its wall (deg; 0 = a cylindrical cup)
+    cone_half_angle_deg: float = 0.0
 
     def __post_init__(self) -> None:
         for f in ("neutral_radius_mm", "length_mm", "arc_radius_mm", "arc_centre_offset_mm", "wall_thickness_mm"):
             object.__setattr__(self, f, size(f, getattr(self, f)))
+        ang = real("cone_half_angle_deg", self.cone_half_angle_deg)
+        if not 0.0 <= ang <= 30.0:
+            raise DesignError("cone_half_angle_deg", ang, "must be from 0 to 30 degrees")
+        object.__setattr__(self, "cone_half_angle_deg", ang)
         if self.arc_radius_mm >= self.length_mm:
             raise DesignError("arc_radius_mm", self.arc_radius_mm, f"must be less than length_mm ({self.length_mm})")
         if self.wall_thickness_mm >= 0.5 * self.neutral_radius_mm:
@@ -78,9 +85,13 @@ class CircularSpline:
     bore_large_radius_mm: float = 57.0
     bore_length_mm: float = 50.0
     outer_radius_mm: float = 65.0
+    #: The sealed drive's working arc in the bore: its radius and its centre's radius (mm)
+    arc_radius_mm: float = 15.0
+    arc_centre_radius_mm: float = 72.0
 
     def __post_init__(self) -> None:
-        for f in ("bore_small_radius_mm", "bore_large_radius_mm", "bore_length_mm", "outer_radius_mm"):
+        for f in ("bore_small_radius_mm", "bore_large_radius_mm", "bore_length_mm", "outer_radius_mm",
+                  "arc_radius_mm", "arc_centre_radius_mm"):
             object.__setattr__(self, f, size(f, getattr(self, f)))
         if self.bore_large_radius_mm <= self.bore_small_radius_mm:
             raise DesignError("bore_large_radius_mm", self.bore_large_radius_mm,
@@ -157,7 +168,9 @@ class Drive:
     arrangement : str
         A key of :data:`prs_geom.harmonic.arrangement.ARRANGEMENTS`: where the working section
         (the ``[flexspline]``, ``[circular_spline]`` and ``[positions]`` fields) sits in the drive,
-        ``"radial_inner"`` (the published drive), ``"radial_outer"`` or ``"end_face"``.
+        ``"radial_inner"`` (the published drive), ``"radial_outer"``, ``"end_face"`` or ``"sealed"``
+        (the cone on the flexspline: ``flexspline.cone_half_angle_deg``, the working arc in the
+        circular spline's bore: ``circular_spline.arc_radius_mm``, ``arc_centre_radius_mm``).
     """
 
     fixed_member: str = "circular_spline"
@@ -172,8 +185,7 @@ class Drive:
 
     def __post_init__(self) -> None:
         if self.arrangement not in ARRANGEMENTS:
-            raise DesignError("arrangement", self.arrangement, f"must be one of {', '.join(ARRANGEMENTS)} "
-                                                               "(the sealed drive is not modelled)")
+            raise DesignError("arrangement", self.arrangement, f"must be one of {', '.join(ARRANGEMENTS)}")
         if self.fixed_member not in FIXED_MEMBERS:
             raise DesignError("fixed_member", self.fixed_member, f"must be one of {', '.join(FIXED_MEMBERS)}")
         if self.flexspline_material not in FLEXSPLINE_MATERIALS:
@@ -256,7 +268,10 @@ HARMONIC_FIELD_COMMENTS: dict[str, str] = {
     "drive.adjusting_mechanism": '"screw", "ball-screw", "worm", "rack" or "gears"',
     "drive.adjusting_travel_per_turn_mm": "axial travel of the circular spline per adjusting-input turn (mm)",
     "drive.stages": "identical stages in series, adjusted together (1 to 4)",
-    "drive.arrangement": '"radial_inner", "radial_outer" or "end_face": where the working section sits',
+    "drive.arrangement": '"radial_inner", "radial_outer", "end_face" or "sealed" (cone on the flexspline)',
+    "flexspline.cone_half_angle_deg": "sealed drive: half-angle of the conical flexspline wall (deg)",
+    "circular_spline.arc_radius_mm": "sealed drive: working arc radius in the bore (mm)",
+    "circular_spline.arc_centre_radius_mm": "sealed drive: radius of the working arc's centre (mm)",
     "generator.kind": '"elliptical" (disc, turns with the input) or "planetary" (cone discs, carrier = wave)',
     "generator.sun_radius_mm": "planetary: input cone disc radius at the cone contact, at positions.min_mm (mm)",
     "generator.planet_cone_radius_mm": "planetary: support-shaft cone radius at that contact (mm)",
@@ -297,6 +312,9 @@ class HarmonicDesign:
     def __post_init__(self) -> None:
         check_name(self.name)
         f, c = self.flexspline, self.circular_spline
+        if self.drive.arrangement == "sealed":
+            self._check_sealed()
+            return
         if c.bore_small_radius_mm <= f.neutral_radius_mm:
             raise DesignError("circular_spline.bore_small_radius_mm", c.bore_small_radius_mm,
                               f"must exceed the flexspline neutral radius {f.neutral_radius_mm}")
@@ -324,6 +342,47 @@ class HarmonicDesign:
             # the cone contact moves monotonically: the ends of travel bound both radii
             generator_stage(self, (self.positions.min_mm, self.positions.max_mm))
 
+    def _check_sealed(self) -> None:
+        """The sealed drive: a conical flexspline, the working arc inside the bore, the arc in
+        reach and touching the cone's straight outer wall over the whole range, beta > 0
+        (below the infinite-ratio position)."""
+        f, c = self.flexspline, self.circular_spline
+        if f.cone_half_angle_deg <= 0.0:
+            raise DesignError("flexspline.cone_half_angle_deg", f.cone_half_angle_deg,
+                              "must be > 0 for the sealed drive (its flexspline is the cone)")
+        if not c.arc_centre_radius_mm - c.arc_radius_mm < c.bore_small_radius_mm < c.arc_centre_radius_mm:
+            raise DesignError("circular_spline.arc_centre_radius_mm", c.arc_centre_radius_mm,
+                              f"minus arc_radius_mm must lie inside the bore (bore_small_radius_mm "
+                              f"{c.bore_small_radius_mm}) and the centre outside it: the arc is a ridge in the bore")
+        if c.outer_radius_mm <= c.arc_centre_radius_mm:
+            raise DesignError("circular_spline.outer_radius_mm", c.outer_radius_mm,
+                              f"must exceed arc_centre_radius_mm ({c.arc_centre_radius_mm})")
+        ridge = math.sqrt(c.arc_radius_mm ** 2 - (c.arc_centre_radius_mm - c.bore_small_radius_mm) ** 2)
+        if ridge >= 0.5 * c.bore_length_mm:
+            raise DesignError("circular_spline.bore_length_mm", c.bore_length_mm,
+                              f"must exceed the working arc's width {2 * ridge:.4g} mm")
+        a_inf = infinite_ratio_position(self)
+        for fld, a in (("positions.min_mm", self.positions.min_mm), ("positions.max_mm", self.positions.max_mm)):
+            beta = float(tilt_angle(self, a))
+            if not beta > 0:
+                raise DesignError(fld, a, f"must be below the infinite-ratio position {a_inf:.6f} mm "
+                                          "(the cone must be tilted outward to reach the arc)")
+            z_c = float(drive_contact(self, a).contact_z_mm)
+            if not f.wall_thickness_mm < z_c < f.length_mm:
+                raise DesignError(fld, a, f"puts the contact at z = {z_c:.4g} mm, off the flexspline's wall "
+                                          f"(0 .. length_mm = {f.length_mm})")
+            ang = math.radians(f.cone_half_angle_deg) + beta
+            if abs(ang) >= math.asin(ridge / c.arc_radius_mm):
+                raise DesignError(fld, a, "puts the contact off the working arc's ridge")
+            # the bore must clear the tilted cone where the ring ends (the wall leans outward)
+            z_end = min(a + 0.5 * c.bore_length_mm, f.length_mm)
+            h = 0.5 * f.wall_thickness_mm
+            outer = f.neutral_radius_mm + h * math.cos(ang) + (z_end + h * math.sin(ang)) * math.tan(ang)
+            if outer >= c.bore_small_radius_mm:
+                raise DesignError("circular_spline.bore_small_radius_mm", c.bore_small_radius_mm,
+                                  f"must clear the tilted flexspline at the ring's end (radius {outer:.4g} mm "
+                                  f"at position {a:g} mm)")
+
     def _check_disc(self) -> None:
         """The end-face disc: clamped at r0, it must not reach the axis, and its inner face
         must stay a face (the arc's centre offset within the neutral radius)."""
@@ -339,7 +398,10 @@ class HarmonicDesign:
 
     @property
     def alpha(self) -> float:
-        """Cone half-angle (rad): tan(alpha) = (b2 - b1) / H."""
+        """Cone half-angle (rad): tan(alpha) = (b2 - b1) / H; the sealed drive's the
+        flexspline's (``flexspline.cone_half_angle_deg``)."""
+        if self.drive.arrangement == "sealed":
+            return math.radians(self.flexspline.cone_half_angle_deg)
         c = self.circular_spline
         return math.atan((c.bore_large_radius_mm - c.bore_small_radius_mm) / c.bore_length_mm)
 
@@ -356,9 +418,14 @@ class HarmonicDesign:
 
 # --------------------------------------------------------------------------- model
 def tilt_angle(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
-    """beta(a) (rad) from the tangency condition, vectorised over a (mm)."""
+    """beta(a) (rad) from the tangency condition, vectorised over a (mm); the sealed drive's
+    by :func:`prs_geom.harmonic.arrangement.sealed_tilt`."""
     a = np.asarray(a, dtype=np.float64)
     f = d.flexspline
+    if d.drive.arrangement == "sealed":
+        c = d.circular_spline
+        return sealed_tilt(a, f.neutral_radius_mm, f.wall_thickness_mm, d.alpha, c.arc_centre_radius_mm,
+                           c.arc_radius_mm)
     amp = math.hypot(d.x_s, f.arc_centre_offset_mm)
     delta = math.atan2(f.arc_centre_offset_mm, d.x_s)
     rhs = f.arc_radius_mm + (a - d.a0) * math.sin(d.alpha)
@@ -371,6 +438,10 @@ def drive_contact(d: HarmonicDesign, a: ArrayLike) -> SectionContact:
     """The contact at positions a (mm) in the drive frame of the design's arrangement
     (:func:`prs_geom.harmonic.arrangement.section_contact`)."""
     f = d.flexspline
+    if d.drive.arrangement == "sealed":
+        c = d.circular_spline
+        return sealed_contact(a, tilt_angle(d, a), f.neutral_radius_mm, f.wall_thickness_mm, d.alpha,
+                              c.arc_centre_radius_mm, c.arc_radius_mm)
     return section_contact(d.arrangement, tilt_angle(d, a), d.alpha, d.x_s, f.arc_centre_offset_mm,
                            f.arc_radius_mm)
 
@@ -390,8 +461,11 @@ def contact_state(d: HarmonicDesign, a: ArrayLike) -> dict[str, NDArray[np.float
 
 def section_radius_difference(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
     """Delta (mm) of the working section in its own frame (the radial inner-wave drive's):
-    positive on the small-tilt branch, zero at the infinite-ratio position."""
+    positive on the small-tilt branch, zero at the infinite-ratio position (the sealed drive's
+    own section: its Delta)."""
     f = d.flexspline
+    if d.drive.arrangement == "sealed":
+        return drive_contact(d, a).radius_difference_mm
     return section_contact(Arrangement("radial_inner", f.neutral_radius_mm), tilt_angle(d, a), d.alpha, d.x_s,
                            f.arc_centre_offset_mm, f.arc_radius_mm).radius_difference_mm
 
@@ -407,8 +481,11 @@ def ratio(d: HarmonicDesign, a: ArrayLike) -> NDArray[np.float64]:
 
 def contact_point(d: HarmonicDesign, a: float) -> tuple[float, float]:
     """(x, r) of the contact in the working section's frame, x from the clamp A (mm); for the
-    radial inner-wave drive the axial section (x from the flexspline bottom)."""
+    radial inner-wave and the sealed drive the axial section (x from the flexspline bottom)."""
     f = d.flexspline
+    if d.drive.arrangement == "sealed":
+        c = drive_contact(d, a)
+        return float(c.contact_z_mm), float(c.contact_rho_mm)
     beta = float(tilt_angle(d, a))
     cx = d.x_s * math.cos(beta) + f.arc_centre_offset_mm * math.sin(beta)
     cr = f.neutral_radius_mm + d.x_s * math.sin(beta) - f.arc_centre_offset_mm * math.cos(beta)
@@ -418,6 +495,10 @@ def contact_point(d: HarmonicDesign, a: float) -> tuple[float, float]:
 def infinite_ratio_position(d: HarmonicDesign) -> float | None:
     """a (mm) where Delta = 0 (the ratio becomes infinite), or None if not reached."""
     f = d.flexspline
+    if d.drive.arrangement == "sealed":
+        c = d.circular_spline
+        return sealed_infinite_position(f.neutral_radius_mm, f.wall_thickness_mm, d.alpha, c.arc_centre_radius_mm,
+                                        c.arc_radius_mm)
     amp = math.hypot(d.x_s, f.arc_centre_offset_mm)
     a_hi = d.a0 + (amp - f.arc_radius_mm) / math.sin(d.alpha) - 1e-9
     a_lo = d.a0
