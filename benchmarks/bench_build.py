@@ -229,6 +229,11 @@ def build_ratios(tmp: Path, repeats: int) -> None:
               f"wall / import {wall / base:5.1f}{goal}; floor ({tris} triangles, {nbytes / 1e6:.0f} MB) "
               f"{floor:.3f} s, wall / floor {wall / floor:5.1f}")
         if example is None:
+            for groups in ("meshes", "sheets"):
+                o = tmp / f"only_{groups}"
+                w = median([child_cpu(["build", "--only", groups, "--out", str(o), "--quiet"], o)[0]
+                            for _ in range(repeats)])
+                print(f"   default --only {groups:8s} wall {w:6.2f} s; wall / import {w / base:5.1f}")
             stages = report["timings_s"]
             print("   default build, stage work (s, wherever it ran; with workers the sum exceeds the wall):")
             for name, sec in stages.items():

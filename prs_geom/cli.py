@@ -235,6 +235,10 @@ def _add_build_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
     p.add_argument("--step", action="store_true",
                    help="also write screw.step, roller.step, nut.step: B-rep solids (STEP AP214; needs "
                         "pip install \"prs-geom[step]\"; several seconds)")
+    p.add_argument("--only", metavar="GROUPS",
+                   help="write only these outputs and report.json, running only the stages they need: a "
+                        "comma list of design, meshes, step, sheets, drawings, plots, parts_list, html "
+                        "(e.g. --only meshes,sheets); the folder is still replaced whole")
     p.add_argument("--force", action="store_true",
                    help="replace files of an earlier output that were edited since prs-geom wrote them "
                         "(refused otherwise)")
@@ -265,7 +269,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     progress = args.progress
     from prs_geom.pipeline import BuildOptions
 
-    options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step)
+    only = tuple(g.strip() for g in args.only.split(",")) if args.only is not None else ()
+    options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step, only=only)
     report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options,
                    force=args.force, source=args.design)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []

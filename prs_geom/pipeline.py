@@ -39,7 +39,7 @@ from prs_geom.exports.report import (BuildResults, ChecksResult, MeshStage, Pitc
                                      step_files, step_warnings)
 from prs_geom.harmonic.model import HarmonicDesign
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.errors import EnvironmentFailure, ResourceLimitError
+from prs_geom.model.errors import DesignError, EnvironmentFailure, ResourceLimitError
 from prs_geom.model.io import PRS_KINDS, design_hash, dumps_toml, load_design
 from prs_geom.runtime.progress import ProgressFn, begin_stage, end_stage, silent, unwatch_job, watch_job
 
@@ -57,7 +57,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 # the build's stages, its context and its worker jobs are the machinery behind build(), not API
 __all__ = ["REPORT_NAME", "DESIGN_KINDS", "load_any_design", "Analysis", "LoadModels", "load_models", "analyse",
-           "design_pitch", "build_meshes", "BuildOptions", "plan_build", "build"]
+           "design_pitch", "build_meshes", "BuildOptions", "OUTPUT_GROUPS", "selected_stages", "kept_file",
+           "plan_build", "build"]
 
 #: The file name of the build report in the output folder.
 REPORT_NAME = "report.json"
@@ -268,6 +269,53 @@ class BuildOptions:
     nominal_screw: bool = False
     #: also write <part>.step (B-rep solids; optional extra [step], several seconds)
     step: bool = False
+    #: write only these output groups (keys of :data:`OUTPUT_GROUPS`) plus report.json; empty:
+    #: every output. Only the stages they need run (``--only``).
+    only: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        only = tuple(self.only)
+        unknown = [g for g in only if g not in OUTPUT_GROUPS]
+        if unknown or (self.only and not only):
+            raise DesignError("--only", ",".join(only), f"must be a comma list of {', '.join(OUTPUT_GROUPS)}")
+        # "step" asks for the STEP files, so it implies --step
+        object.__setattr__(self, "only", tuple(sorted(set(only), key=list(OUTPUT_GROUPS).index)))
+        if "step" in self.only:
+            object.__setattr__(self, "step", True)
+
+
+OUTPUT_GROUPS: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
+    "design": (frozenset({"design"}), ("design.toml",)),
+    "meshes": (frozenset({"pitch", "contact", "meshes"}), ("*.stl", "assembly.glb", "assembly.3mf")),
+    "step": (frozenset({"pitch", "contact", "meshes"}), ("*.step",)),
+    "sheets": (frozenset({"pitch", "contact", "manufacturing"}), ("machining*.csv", "machining.xlsx",
+                                                                  "inspection.csv")),
+    "drawings": (frozenset({"pitch", "contact", "manufacturing"}), ("drawing_*.dxf", "drawings.pdf",
+                                                                    "profiles.dxf")),
+    "plots": (frozenset({"pitch", "contact", "loads", "rating", "tolerance"}), ("*.png", "*.svg")),
+    "parts_list": (frozenset({"pitch", "contact", "meshes", "mechanism"}), ("parts_list.csv", "parts_list.xlsx")),
+    "html": (frozenset(), ("report.html",)),    # every stage: the page reports them all
+}
+"""The output groups ``--only`` selects: group -> (the stages it needs, their upstream ones
+included; the files it keeps, shell patterns). report.json is always written; ``html`` runs
+every stage."""
+
+
+def selected_stages(only: tuple[str, ...]) -> list[tuple[str, Callable[["BuildContext"], None]]]:
+    """The stages of :data:`STAGES` that the output groups ``only`` need, in run order
+    (all of them for ``html`` or when ``only`` is empty)."""
+    if not only or "html" in only:
+        return list(STAGES)
+    need = frozenset().union(*(OUTPUT_GROUPS[g][0] for g in only))
+    return [(name, fn) for name, fn in STAGES if name in need]
+
+
+def kept_file(name: str, only: tuple[str, ...]) -> bool:
+    """Whether output file ``name`` belongs to one of the groups ``only`` (report.json
+    always does)."""
+    from fnmatch import fnmatchcase
+
+    return name == REPORT_NAME or any(fnmatchcase(name, pat) for g in only for pat in OUTPUT_GROUPS[g][1])
 
 
 @dataclass(frozen=True)
@@ -405,7 +453,8 @@ def stage_contact(ctx: BuildContext) -> None:
     ctx.results.contact = analyse_contact(ctx.design)
     if ctx.runs("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
-    if ctx.runs("manufacturing"):
+    if ctx.runs("manufacturing") and (not ctx.options.only or "drawings" in ctx.options.only
+                                      or "html" in ctx.options.only):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
         ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
@@ -620,7 +669,8 @@ def stage_manufacturing(ctx: BuildContext) -> None:
 
     write_dxf(ctx.design, ctx.add_file("profiles.dxf"), extra, part_profiles(ctx.design, ctx.results.contact),
               _build_date())
-    ctx.results.files += ctx.take("manufacturing")  # the drawings, started after the contact stage
+    if "manufacturing" in ctx.jobs:     # the drawings, started after the contact stage when wanted
+        ctx.results.files += ctx.take("manufacturing")
 
 
 def stage_mechanism(ctx: BuildContext) -> None:
@@ -811,6 +861,19 @@ def plan_build(design: PRSDesign, memory_budget: int | None = None) -> "tuple[in
         return 0, guard(design, memory_budget, workers=0)
 
 
+def _keep_only(ctx: BuildContext, tmp: Path, only: tuple[str, ...]) -> None:
+    """Remove from the temporary output folder and the report's file list every file the
+    stages wrote that is not in the groups ``only`` (a stage writes whole sets: the
+    manufacturing stage its sheets and the profiles DXF together)."""
+    kept = []
+    for name in ctx.results.files:
+        if kept_file(name, only):
+            kept.append(name)
+        elif (tmp / name).is_file():
+            (tmp / name).unlink()
+    ctx.results.files[:] = kept
+
+
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
           memory_budget: int | None = None, options: BuildOptions | None = None, *, force: bool = False,
           source: str | Path | None = None) -> dict[str, Any]:
@@ -826,7 +889,9 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     ``out_dir`` keeps its previous content. ``force`` replaces files of an earlier output
     that were edited since prs-geom wrote them (refused otherwise); ``source``, the design
     file the design was read from: when it lies inside ``out_dir`` it is kept byte for
-    byte. Returns the report dict.
+    byte. ``options.only``: write only those output groups (:data:`OUTPUT_GROUPS`) and
+    report.json, running only the stages they need; the folder is still replaced whole and its
+    manifest records ``only``. Returns the report dict.
 
     Examples
     --------
@@ -857,12 +922,23 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     # the budget holds while the build runs, too (prs_geom.runtime.memwatch): exit 3, nothing written
     watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,
                         f"the build of {design.name}", base_bytes=BASE_BYTES)
+    only = options.only if options is not None else ()
+    if only and harmonic:
+        raise DesignError("--only", ",".join(only), "applies to planetary roller screw builds, not to a harmonic drive")
+    if only:
+        atomic.extra["only"] = list(only)
     try:
         with watch, atomic as tmp:
-            ctx = run_stages(design, tmp, progress, HARMONIC_STAGES if harmonic else None, options,
-                             workers=workers)
+            stages = HARMONIC_STAGES if harmonic else (selected_stages(only) if only else None)
+            ctx = run_stages(design, tmp, progress, stages, options, workers=workers)
             ctx.results.files.append(REPORT_NAME)
+            if only:
+                _keep_only(ctx, tmp, only)
             report = report_dict(ctx.results)
+            if only:
+                # the stages that did not run have no section; "only" says why
+                report = {k: v for k, v in report.items() if v is not None}
+                report["only"] = list(only)
             (tmp / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
     except ResourceLimitError:
         raise
