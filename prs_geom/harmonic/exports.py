@@ -186,13 +186,19 @@ def _sketch(d: HarmonicDesign, ax: Any) -> None:
     ax.fill(*draw([gx - 6.0, gx + 6.0, gx + 6.0, gx - 6.0], [0.0, 0.0, r0 - 2.0, r0 - 2.0]), facecolor="C2",
             alpha=0.25, edgecolor="C2", label="wave generator (input)")
     ax.plot(*draw([cx], [cr]), "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
+    ax.autoscale()
+    _finish_sketch(d, ax, f"{arr.kind.replace('_', ' ')}: ", "cone")
+
+
+def _finish_sketch(d: HarmonicDesign, ax: Any, lead: str, cone: str) -> None:
+    """The sketch's title (fixed member, output, cone angle), axis labels, scale and legend."""
+    fixed = d.drive.fixed_member
     out = "flexspline" if fixed == "circular_spline" else "circular spline"
-    ax.set_title(f"{arr.kind.replace('_', ' ')}: {fixed.replace('_', ' ')} fixed (hatched), {out} output; "
-                 f"cone {math.degrees(d.alpha):.3f} deg", fontsize=9)
+    ax.set_title(f"{lead}{fixed.replace('_', ' ')} fixed (hatched), {out} output; {cone} "
+                 f"{math.degrees(d.alpha):.3f} deg", fontsize=9)
     ax.set_xlabel("z along the axis (mm)")
     ax.set_ylabel("distance from the axis (mm)")
     ax.set_aspect("equal")
-    ax.autoscale()
     ax.set_ylim(bottom=0.0)
     ax.legend(fontsize=7, loc="lower left")
 
@@ -237,14 +243,7 @@ def _sealed_sketch(d: HarmonicDesign, ax: Any, a: float) -> None:
                                                      d.flexspline.neutral_radius_mm - 3.0],
             facecolor="C2", alpha=0.25, edgecolor="C2", label="wave generator (input)")
     ax.plot([cx], [cr], "o", color="C3", ms=5, label=f"contact, a = {a:g} mm")
-    out = "flexspline" if fixed == "circular_spline" else "circular spline"
-    ax.set_title(f"sealed: {fixed.replace('_', ' ')} fixed (hatched), {out} output; flexspline cone "
-                 f"{math.degrees(d.alpha):.3f} deg", fontsize=9)
-    ax.set_xlabel("z along the axis (mm)")
-    ax.set_ylabel("distance from the axis (mm)")
-    ax.set_aspect("equal")
-    ax.set_ylim(bottom=0.0)
-    ax.legend(fontsize=7, loc="lower left")
+    _finish_sketch(d, ax, "sealed: ", "flexspline cone")
 
 
 def write_dxf(d: HarmonicDesign, path: Path) -> None:
