@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import prs_geom as pg
-from prs_geom.harmonic.arrangement import Arrangement, section_contact
+from prs_geom.harmonic.arrangement import Arrangement
 from prs_geom.harmonic.assembly import assembly_checks, build_assembly, measured_ratio, mesh_rows
-from prs_geom.harmonic.drive import disc_wave_stress, harmonic_ratio
+from prs_geom.harmonic.drive import disc_wave_stress
 from prs_geom.harmonic.model import contact_state, drive_contact, ratio_table, strength_section, tilt_angle
 from prs_geom.model.errors import DesignError
 
@@ -157,8 +157,15 @@ def test_strength_per_arrangement():
     face = {r["material"]: r for r in strength_section(d)}
     rim = f.neutral_radius_mm + f.length_mm
     beta = math.asin(300.0 * rim ** 2 / (2 * 206e3 * f.wall_thickness_mm) / f.length_mm)
-    expect = section_contact(d.arrangement, beta, d.alpha, d.x_s, f.arc_centre_offset_mm, f.arc_radius_mm).ratio
-    assert face["steel"]["min_ratio"] == pytest.approx(float(expect), rel=1e-12)
+    # the contact at that tilt, built with rotation matrices in the drive frame (rho, z):
+    # the rim arc's centre turned about the clamp, the contact r_s from it along the face's
+    # normal (the face leans alpha from the radial plane), its material point turned back
+    A = np.array([f.neutral_radius_mm, 0.0])
+    centre = _turn([f.neutral_radius_mm + d.x_s, -f.arc_centre_offset_mm], A, beta)
+    contact = centre + f.arc_radius_mm * np.array([-math.sin(d.alpha), math.cos(d.alpha)])
+    material = _turn(contact, A, -beta)
+    expect = material[0] / abs(contact[0] - material[0])
+    assert face["steel"]["min_ratio"] == pytest.approx(expect, rel=1e-9)
     assert face["steel"]["stress_at_min_position_mpa"] == pytest.approx(
         2 * 206e3 * f.wall_thickness_mm * f.length_mm * math.sin(float(tilt_angle(d, 42.0))) / rim ** 2, rel=1e-12)
 
@@ -239,11 +246,119 @@ def test_sealed_contact_by_an_independent_construction():
         dataclasses.replace(d, flexspline=dataclasses.replace(f, cone_half_angle_deg=0.0))
 
 
-def test_signed_ratio_helper_agrees_for_every_arrangement():
-    for kind in ("radial_inner", "radial_outer", "end_face", "sealed"):
-        d = arranged(kind)
-        c = drive_contact(d, 50.0)
+def _willis(r_f: float, r_c: float, fixed: str) -> float:
+    """Generator over output speed from the rolling condition at the travelling contact,
+    r_f (w_f - w_g) = r_c (w_c - w_g), solved as a 2x2 linear system with w_g = 1 and the
+    fixed member's speed 0 (unknowns: the two members' speeds)."""
+    A = np.array([[r_f, -r_c], [1.0, 0.0] if fixed == "flexspline" else [0.0, 1.0]])
+    w_f, w_c = np.linalg.solve(A, [r_f - r_c, 0.0])
+    return 1.0 / (w_c if fixed == "flexspline" else w_f)
+
+
+@pytest.mark.parametrize("kind", ["radial_inner", "radial_outer", "end_face", "sealed"])
+def test_signed_ratios_are_willis_for_every_arrangement(kind):
+    """The table's signed ratios against Willis' equation solved as a linear system, with
+    the flexspline rolling on r_f and the circular spline on r_f + Delta (the arrangement's
+    Delta in the drive frame)."""
+    d = arranged(kind)
+    for row in ratio_table(d, (d.positions.min_mm, d.positions.max_mm)):
+        c = drive_contact(d, row["a_mm"])
         r_f = float(c.flexspline_rolling_radius_mm)
-        rows = ratio_table(d, [50.0])
-        assert rows[0]["ratio_circular_spline_fixed"] == pytest.approx(
-            float(harmonic_ratio(r_f, r_f + float(c.radius_difference_mm), "circular_spline")), rel=1e-12)
+        r_c = r_f + float(c.radius_difference_mm)
+        for fixed in ("circular_spline", "flexspline"):
+            assert row[f"ratio_{fixed}_fixed"] == pytest.approx(_willis(r_f, r_c, fixed), rel=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["radial_inner", "radial_outer", "end_face", "sealed"])
+def test_pressing_force_and_torque_per_arrangement(kind):
+    """The normal force is the axial pressing force over the sine of the working cone's
+    half-angle about the axis: alpha for the radial drives, the flexspline's cone for the
+    sealed one, 90 deg - alpha for the end face's face (no wedge); the torque mu N r / S."""
+    d = arranged(kind)
+    drive = d.drive
+    alpha = math.radians(d.flexspline.cone_half_angle_deg) if kind == "sealed" else d.alpha
+    half = 0.5 * math.pi - alpha if kind == "end_face" else alpha
+    from prs_geom.harmonic.model import drive_section
+
+    rows = ratio_table(d)
+    sec = drive_section(d, rows)
+    assert sec["normal_force_n"] == pytest.approx(drive.pressing_force_n / math.sin(half), rel=1e-12)
+    assert sec["arrangement"] == kind
+    for row in rows[::16]:
+        expect = drive.friction_coefficient * sec["normal_force_n"] * row["contact_radius_mm"] / drive.slip_safety_factor
+        assert row["output_torque_nm"] == pytest.approx(expect * 1e-3, rel=1e-12)
+
+
+def test_sealed_contact_load_takes_the_ridge_arc():
+    """In the sealed drive the meridian curvature is the circular spline's working arc: its
+    radius moves the Hertz pressure, the flexspline's unused arc radius does not."""
+    d = arranged("sealed")
+    base = ratio_table(d, [60.0])[0]["contact_pressure_mpa"]
+    flex = dataclasses.replace(d, flexspline=dataclasses.replace(d.flexspline, arc_radius_mm=5.0))
+    assert ratio_table(flex, [60.0])[0]["contact_pressure_mpa"] == pytest.approx(base, rel=1e-12)
+    ridge = dataclasses.replace(d, circular_spline=dataclasses.replace(d.circular_spline, arc_radius_mm=14.0,
+                                                                       arc_centre_radius_mm=71.0))
+    assert ratio_table(ridge, [60.0])[0]["contact_pressure_mpa"] > 1.01 * base
+
+
+def test_sealed_strength_bends_the_cone_at_its_contact_radius():
+    """The thin ring that bends is the cone at the contact: 3 E t Delta / (2 r^2) with r the
+    rolling radius there (not r0), so the smallest ratio is r / Delta_max."""
+    d = arranged("sealed")
+    f = d.flexspline
+    rows = {r["material"]: r for r in strength_section(d)}
+    c = drive_contact(d, d.positions.min_mm)
+    r = float(c.flexspline_rolling_radius_mm)
+    assert r > f.neutral_radius_mm + 3.0
+    stress = 3 * 206e3 * f.wall_thickness_mm * abs(float(c.radius_difference_mm)) / (2 * r ** 2)
+    assert rows["steel"]["stress_at_min_position_mpa"] == pytest.approx(stress, rel=1e-12)
+    assert rows["steel"]["min_ratio"] == pytest.approx(r / (300.0 * 2 * r ** 2 / (3 * 206e3 * f.wall_thickness_mm)),
+                                                       rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["radial_outer", "end_face", "sealed"])
+def test_tolerance_rule_uses_the_arrangements_radii(kind):
+    """At the largest ratio the radius difference of the tolerance rule is the table's Delta
+    at positions.max_mm, on the contact diameter there."""
+    from prs_geom.harmonic.model import tolerance_for_ratio
+
+    d = arranged(kind)
+    last = ratio_table(d, [d.positions.max_mm])[0]
+    tol = tolerance_for_ratio(d, last["ratio"])
+    assert tol["radius_difference_mm"] == pytest.approx(abs(last["radius_difference_mm"]), rel=1e-9)
+    assert tol["bore_diameter_mm"] == pytest.approx(2.0 * last["cone_radius_mm"], rel=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["radial_outer", "end_face", "sealed"])
+def test_axial_sections_dxf_is_drawn_in_the_drive_frame(kind, tmp_path):
+    """axial_sections.dxf read back with ezdxf: in each position's block the contact POINT is
+    the drive-frame contact (x along the axis, y from it), and the circular spline's working
+    outline passes through it (the cone LINE, or the sealed ring's outline)."""
+    import ezdxf
+
+    from prs_geom.geometry.planar import point_segment_distance
+    from prs_geom.harmonic.exports import write_dxf
+
+    d = arranged(kind)
+    write_dxf(d, tmp_path / "s.dxf")
+    doc = ezdxf.readfile(tmp_path / "s.dxf")
+    for k, a in enumerate(d.positions.drawing_mm):
+        blk = doc.blocks.get(f"POSITION_{k}")
+        c = drive_contact(d, a)
+        p = np.array([float(c.contact_z_mm), float(c.contact_rho_mm)])
+        pt = [e for e in blk if e.dxftype() == "POINT"][0].dxf.location
+        assert np.allclose([pt.x, pt.y], p, atol=1e-9)
+        segs = []
+        for e in blk:
+            if e.dxftype() == "LINE":
+                segs.append((np.array(e.dxf.start)[:2], np.array(e.dxf.end)[:2]))
+            elif e.dxftype() == "LWPOLYLINE":
+                q = np.array([v[:2] for v in e.get_points()])
+                if e.closed:
+                    q = np.concatenate([q, q[:1]])
+                segs += list(zip(q[:-1], q[1:]))
+        start = np.array([s[0] for s in segs])
+        end = np.array([s[1] for s in segs])
+        # the flexspline's outline and the circular spline's both touch the contact
+        near = np.sort(point_segment_distance(p, start, end))
+        assert near[1] <= 2e-3, (kind, a, near[:3])

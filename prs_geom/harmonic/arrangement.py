@@ -29,8 +29,8 @@ distance from the drive axis, and with it the radius difference at the contact:
 Delta = rho(contact point) - rho(the same material point on the undeformed flexspline),
 and the flexspline's rolling radius (r0 for the radial drives, whose neutral layer keeps its
 length; rho of the undeformed contact point for the disc). The deformation of every meridian
-is the turn about A by ``sense * beta(theta)`` in the drive frame
-(:meth:`Arrangement.tilt_sense`).
+is the section's turn about A by beta(theta), carried into the drive by the map (the mirror
+and the quarter turn reverse its sense of rotation in (rho, z)).
 
 * ``sealed`` (the source's sealed drive): the cone is on the flexspline and the contact arc on
   the circular spline, so it is not a map of the published section but a section of its own
@@ -95,13 +95,6 @@ class Arrangement:
             raise ValueError(f"arrangement {self.kind!r}: must be one of {', '.join(ARRANGEMENTS)}")
         if not (math.isfinite(self.neutral_radius_mm) and self.neutral_radius_mm > 0):
             raise ValueError(f"neutral_radius_mm = {self.neutral_radius_mm}: must be finite and > 0")
-
-    @property
-    def tilt_sense(self) -> float:
-        """+1 or -1: the section's tilt beta turns a drive meridian by ``tilt_sense * beta``
-        about A (positive = the open end away from the axis, as in :func:`turn_about_clamp`).
-        The mirror and the quarter turn both reverse the sense of rotation in (rho, z)."""
-        return 1.0 if self.kind in ("radial_inner", "sealed") else -1.0
 
     @property
     def is_disc(self) -> bool:

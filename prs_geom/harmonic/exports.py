@@ -45,7 +45,7 @@ from prs_geom.geometry.planar import point_segment_distance
 from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
                                         flexspline_mesh, flexspline_profile, revolution_sections)
 from prs_geom.harmonic.assembly import default_position
-from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, tilt_angle
+from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, drive_contact, tilt_angle
 
 __all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "plot_drive", "write_dxf", "ASSEMBLY_MATERIALS",
            "assembly_scene", "display_colours", "HarmonicPlacement", "place_harmonic",
@@ -207,12 +207,43 @@ def _dxf_position_note(d: HarmonicDesign, blk: Any, a: float, beta: float) -> No
     """The axis line, the contact point and the position's numbers in a DXF block."""
     f, c = d.flexspline, d.circular_spline
     blk.add_line((-5.0, 0.0), (f.length_mm + 5.0, 0.0), dxfattribs={"layer": "CENTRE"})
-    px, pr = contact_point(d, a)
     st = contact_state(d, a)
+    # the contact in the drive frame (the section's own for the published and sealed drives)
+    hit = drive_contact(d, a)
+    px, pr = float(hit.contact_z_mm), float(hit.contact_rho_mm)
+    top = max(c.outer_radius_mm, f.neutral_radius_mm + f.length_mm) if d.arrangement.is_disc else c.outer_radius_mm
     blk.add_text(f"a = {a:g} mm, beta = {math.degrees(beta):.5f} deg, contact r = {float(st['contact_radius_mm']):.4f}, "
                  f"Delta = {float(st['radius_difference_mm']):.5f} mm, i = {float(st['ratio']):.1f}",
-                 height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, c.outer_radius_mm + 2.0))
+                 height=1.5, dxfattribs={"layer": "ANNOTATION"}).set_placement((0.0, top + 2.0))
     blk.add_point((px, pr), dxfattribs={"layer": "ANNOTATION"})
+
+
+def _mapped_section(d: HarmonicDesign, blk: Any, a: float, beta: float) -> None:
+    """The outer-wave and end-face drives' section in the drive frame (x along the axis, y
+    the distance from it): the tilted generatrix (LINE), the contact arc +-30 deg about the
+    contact (LWPOLYLINE of its mapped points) and the circular spline's cone wall (LINE; the
+    end face's ring at its radial place, :func:`~prs_geom.harmonic.assembly.face_reference_position`)."""
+    from prs_geom.harmonic.assembly import face_reference_position
+
+    f, c, arr = d.flexspline, d.circular_spline, d.arrangement
+    r0 = f.neutral_radius_mm
+
+    def to_dxf(x: Any, r: Any) -> list[tuple[float, float]]:
+        rho, z = arr.to_drive(np.atleast_1d(x), np.atleast_1d(r))
+        return [(float(zz), float(rr)) for zz, rr in zip(z, rho)]
+
+    g = np.array([math.cos(beta), math.sin(beta)])
+    nrm = np.array([-math.sin(beta), math.cos(beta)])
+    A = np.array([0.0, r0])
+    C = A + d.x_s * g - f.arc_centre_offset_mm * nrm
+    end = A + d.x_s * g
+    blk.add_line(*to_dxf([A[0], end[0]], [A[1], end[1]]), dxfattribs={"layer": "PROFILE"})
+    psi = math.pi / 2 + d.alpha + np.radians(np.linspace(-30.0, 30.0, 61))
+    blk.add_lwpolyline(to_dxf(C[0] + f.arc_radius_mm * np.cos(psi), C[1] + f.arc_radius_mm * np.sin(psi)),
+                       dxfattribs={"layer": "PROFILE"})
+    x0 = face_reference_position(d) if arr.is_disc else a
+    xs = np.array([x0, x0 + c.bore_length_mm])
+    blk.add_line(*to_dxf(xs, c.bore_small_radius_mm + (xs - a) * math.tan(d.alpha)), dxfattribs={"layer": "PROFILE"})
 
 
 def _sealed_profiles(d: HarmonicDesign, a: float) -> tuple[np.ndarray, np.ndarray]:
@@ -249,7 +280,10 @@ def _sealed_sketch(d: HarmonicDesign, ax: Any, a: float) -> None:
 def write_dxf(d: HarmonicDesign, path: Path) -> None:
     """Axial section (major axis) at each position of ``positions.drawing_mm``: the tilted
     flexspline generatrix (LINE, neutral layer) with its contact ARC, and the cone bore
-    (LINE); one named block per position (``POSITION_<k>``), x from the flexspline bottom."""
+    (LINE); one named block per position (``POSITION_<k>``), x from the flexspline bottom
+    along the axis, y the distance from it, in the drive frame of the arrangement (the
+    outer-wave and end-face sections mapped, :func:`_mapped_section`; the sealed drive's
+    outlines, :func:`_sealed_profiles`)."""
     doc = ezdxf.new("R2010", setup=True)
     doc.units = units.MM
     doc.header["$INSUNITS"] = 4
@@ -266,6 +300,11 @@ def write_dxf(d: HarmonicDesign, path: Path) -> None:
             for poly in _sealed_profiles(d, a):
                 blk.add_lwpolyline([(float(q[1]), float(q[0])) for q in poly], close=True,
                                    dxfattribs={"layer": "PROFILE"})
+            _dxf_position_note(d, blk, a, beta)
+            msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
+            continue
+        if d.drive.arrangement != "radial_inner":
+            _mapped_section(d, blk, a, beta)
             _dxf_position_note(d, blk, a, beta)
             msp.add_blockref(blk.name, (0.0, k * (c.outer_radius_mm + 15.0)))
             continue

@@ -311,10 +311,18 @@ class HarmonicDesign:
 
     def __post_init__(self) -> None:
         check_name(self.name)
-        f, c = self.flexspline, self.circular_spline
         if self.drive.arrangement == "sealed":
             self._check_sealed()
-            return
+        else:
+            self._check_section()
+        if self.generator.kind == "planetary":
+            # the cone contact moves monotonically: the ends of travel bound both radii
+            generator_stage(self, (self.positions.min_mm, self.positions.max_mm))
+
+    def _check_section(self) -> None:
+        """The working section of the radial and end-face drives: the arc reaches the cone
+        over the whole range, Delta stays positive and of one sign in the drive."""
+        f, c = self.flexspline, self.circular_spline
         if c.bore_small_radius_mm <= f.neutral_radius_mm:
             raise DesignError("circular_spline.bore_small_radius_mm", c.bore_small_radius_mm,
                               f"must exceed the flexspline neutral radius {f.neutral_radius_mm}")
@@ -338,9 +346,6 @@ class HarmonicDesign:
             raise DesignError("positions.min_mm", self.positions.min_mm,
                               f"the {self.drive.arrangement} drive's radius difference changes sign over the "
                               "control range (its ratio passes through infinity)")
-        if self.generator.kind == "planetary":
-            # the cone contact moves monotonically: the ends of travel bound both radii
-            generator_stage(self, (self.positions.min_mm, self.positions.max_mm))
 
     def _check_sealed(self) -> None:
         """The sealed drive: a conical flexspline, the working arc inside the bore, the arc in
@@ -522,14 +527,21 @@ def tolerance_for_ratio(d: HarmonicDesign, max_ratio: float, ratio_error: float 
     ratio changes by 2 e / Delta relative: e = ratio_error Delta / 2. A centred diameter
     tolerance band T gives radius errors of +-T/4, so T = 4 e. ``it_grade`` is the coarsest
     ISO 286 grade (name, IT01..IT13, :mod:`prs_geom.model.standards`) whose standard
-    tolerance on the bore diameter fits in T (None: finer than IT01 needed).
+    tolerance on the bore diameter fits in T (None: finer than IT01 needed). The other
+    arrangements take their rolling radius for r0 and the contact diameter for the bore's,
+    both at positions.max_mm.
     """
     if not max_ratio > 0:
         raise DesignError("max_ratio", max_ratio, "must be > 0")
     delta = d.flexspline.neutral_radius_mm / max_ratio
+    dia = 2.0 * d.circular_spline.bore_large_radius_mm
+    if d.drive.arrangement != "radial_inner":
+        # the arrangement's rolling radius and contact diameter, at the largest position
+        end = drive_contact(d, d.positions.max_mm)
+        delta = float(end.flexspline_rolling_radius_mm) / max_ratio
+        dia = 2.0 * float(end.contact_rho_mm)
     e = ratio_error * delta / 2.0
     T_um = 4.0 * e * 1e3
-    dia = 2.0 * d.circular_spline.bore_large_radius_mm
     grade = None
     for name in reversed(GRADE_NAMES):
         if it_tolerance_by_name_um(name, dia) <= T_um:
@@ -629,7 +641,7 @@ def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
     flexspline material (:func:`prs_geom.harmonic.drive.contact_load`)."""
     dr = d.drive
     kind = d.drive.arrangement
-    half_angle, curvature = d.alpha, None
+    half_angle, curvature, arc = d.alpha, None, d.flexspline.arc_radius_mm
     if kind != "radial_inner":
         r_m, r_c = state["contact_radius_mm"], state["cone_radius_mm"]
         delta = np.abs(state["radius_difference_mm"])
@@ -637,13 +649,19 @@ def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
             # concave flexspline (its inner face, flattened at the major axis by 3 Delta / r0^2)
             # on the convex outer wall: the same sum as the inner-wave drive's, mirrored
             curvature = math.cos(d.alpha) * (1.0 / r_c - 1.0 / r_m + 3.0 * delta / d.flexspline.neutral_radius_mm ** 2)
+        elif kind == "sealed":
+            # the convex cone (ovalised by 3 Delta / r_f^2) in the ridge's bore; the normal leans
+            # by alpha + beta from the radial, the meridian curvature is the ridge's arc
+            ang = d.alpha + state["beta_rad"]
+            curvature = np.cos(ang) * (1.0 / r_m + 3.0 * delta / state["rolling_radius_mm"] ** 2 - 1.0 / r_c)
+            arc = d.circular_spline.arc_radius_mm
         else:
             # the face's half-angle about the axis is 90 deg - alpha: its circumferential normal
             # curvature sin(alpha) / rho; the rim's axial wave W cos(2 theta) adds 4 W / rho^2
             half_angle = 0.5 * math.pi - d.alpha
             wave = (r_m - d.flexspline.neutral_radius_mm) * np.abs(np.sin(state["beta_rad"]))
             curvature = np.abs(math.sin(d.alpha) * (1.0 / r_c - 1.0 / r_m)) + 4.0 * wave / r_m ** 2
-    return contact_load(half_angle, d.flexspline.arc_radius_mm, d.flexspline.neutral_radius_mm,
+    return contact_load(half_angle, arc, d.flexspline.neutral_radius_mm,
                         state["contact_radius_mm"], state["cone_radius_mm"], state["radius_difference_mm"],
                         design_ratio(d, state["a_mm"]), dr.pressing_force_n, dr.friction_coefficient,
                         dr.slip_safety_factor, FLEXSPLINE_MATERIALS[dr.flexspline_material], curvature)
@@ -670,8 +688,10 @@ def _strength_limits(d: HarmonicDesign) -> dict[str, Any]:
     if d.drive.arrangement == "end_face":
         return {key: _disc_strength_limit(d, mat) for key, mat in FLEXSPLINE_MATERIALS.items()}
     lo, hi = (float(radius_difference(d, a)) for a in (d.positions.min_mm, d.positions.max_mm))
-    return {key: strength_limit(mat, f.neutral_radius_mm, f.wall_thickness_mm, lo, hi)
-            for key, mat in FLEXSPLINE_MATERIALS.items()}
+    # the ring that bends is the flexspline at the contact: r0 in the radial drives, the
+    # cone's neutral radius there in the sealed one (at the smallest ratio, where it counts)
+    ring = float(drive_contact(d, d.positions.min_mm).flexspline_rolling_radius_mm)
+    return {key: strength_limit(mat, ring, f.wall_thickness_mm, lo, hi) for key, mat in FLEXSPLINE_MATERIALS.items()}
 
 
 def flexspline_stress(d: HarmonicDesign, a: ArrayLike, mat: Any) -> NDArray[np.float64]:
