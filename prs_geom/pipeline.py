@@ -275,13 +275,17 @@ class BuildOptions:
 
     def __post_init__(self) -> None:
         only = tuple(self.only)
-        unknown = [g for g in only if g not in OUTPUT_GROUPS]
-        if unknown or (self.only and not only):
+        if any(g not in OUTPUT_GROUPS for g in only):
             raise DesignError("--only", ",".join(only), f"must be a comma list of {', '.join(OUTPUT_GROUPS)}")
         # "step" asks for the STEP files, so it implies --step
         object.__setattr__(self, "only", tuple(sorted(set(only), key=list(OUTPUT_GROUPS).index)))
         if "step" in self.only:
             object.__setattr__(self, "step", True)
+
+    def wants(self, group: str) -> bool:
+        """Whether the build writes the outputs of ``group`` (every build but an ``--only``
+        without it; ``html`` reports them all)."""
+        return not self.only or group in self.only or "html" in self.only
 
 
 OUTPUT_GROUPS: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
@@ -453,8 +457,7 @@ def stage_contact(ctx: BuildContext) -> None:
     ctx.results.contact = analyse_contact(ctx.design)
     if ctx.runs("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
-    if ctx.runs("manufacturing") and (not ctx.options.only or "drawings" in ctx.options.only
-                                      or "html" in ctx.options.only):
+    if ctx.runs("manufacturing") and ctx.options.wants("drawings"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
         ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
@@ -774,6 +777,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
 def harmonic_stage(ctx: BuildContext) -> None:
     """Ratio table and plot, DXF at the drawing positions, STL meshes (harmonic designs)."""
     from prs_geom.exports.meshes import stl_header, write_stl
+    from prs_geom.harmonic.assembly import circular_spline_arc_bound
     from prs_geom.harmonic.exports import (circular_spline_mesh, circular_spline_profile, flexspline_mesh,
                                            flexspline_profile, plot_drive, plot_ratio, ratio_table_csv,
                                            revolve_deviation,
@@ -790,9 +794,7 @@ def harmonic_stage(ctx: BuildContext) -> None:
     rows = []
     tol = d.mesh.chord_tolerance_mm
     for name, mesh, prof, arc_bound in (
-            # the sealed drive's ring carries the working arc, sampled at a quarter of the tolerance
-            ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d),
-             0.25 * tol if d.drive.arrangement == "sealed" else 0.0),
+            ("circular_spline", circular_spline_mesh(d), circular_spline_profile(d), circular_spline_arc_bound(d, tol)),
             ("flexspline", flexspline_mesh(d), flexspline_profile(d), 0.5 * tol)):
         write_stl(mesh, ctx.add_file(f"{name}.stl"), stl_header(name, design_hash(d)))
         rev = revolve_deviation(mesh, prof)

@@ -101,27 +101,41 @@ class Arrangement:
         """True when the flexspline is a disc clamped at r0 (no cup bottom to the axis)."""
         return self.kind == "end_face"
 
+    @property
+    def generator_is_disc(self) -> bool:
+        """True when the wave generator is the elliptical disc inside the flexspline (the
+        radial inner-wave and sealed drives); else it is the section's generator mapped."""
+        return self.kind in ("radial_inner", "sealed")
+
+    def working_half_angle(self, alpha: float) -> float:
+        """Half-angle (rad) about the axis of the cone the pressing force acts on: alpha, the
+        end face's face 90 deg - alpha."""
+        return 0.5 * math.pi - alpha if self.is_disc else alpha
+
+    @property
+    def affine(self) -> tuple[tuple[tuple[float, float], tuple[float, float]], tuple[float, float]]:
+        """The map as (M, c): (rho, z) = M (x, r) + c, M orthogonal (a rotation or a mirror)."""
+        r0 = self.neutral_radius_mm
+        if self.kind in ("radial_inner", "sealed"):
+            return ((0.0, 1.0), (1.0, 0.0)), (0.0, 0.0)
+        if self.kind == "radial_outer":
+            return ((0.0, -1.0), (1.0, 0.0)), (2.0 * r0, 0.0)
+        return ((1.0, 0.0), (0.0, 1.0)), (r0, -r0)
+
     def to_drive(self, x: ArrayLike, r: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """(rho, z) (mm) in the drive's meridian of section points (x, r) (mm); broadcasts."""
         x = np.asarray(x, dtype=np.float64)
         r = np.asarray(r, dtype=np.float64)
-        r0 = self.neutral_radius_mm
-        if self.kind in ("radial_inner", "sealed"):
-            return r + 0.0 * x, x + 0.0 * r
-        if self.kind == "radial_outer":
-            return 2.0 * r0 - r + 0.0 * x, x + 0.0 * r
-        return r0 + x + 0.0 * r, r - r0 + 0.0 * x
+        ((a, b), (c, d)), (e, f) = self.affine
+        return a * x + b * r + e, c * x + d * r + f
 
     def to_section(self, rho: ArrayLike, z: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """(x, r) (mm) of drive-meridian points (rho, z) (mm): the inverse of :meth:`to_drive`."""
-        rho = np.asarray(rho, dtype=np.float64)
-        z = np.asarray(z, dtype=np.float64)
-        r0 = self.neutral_radius_mm
-        if self.kind in ("radial_inner", "sealed"):
-            return z + 0.0 * rho, rho + 0.0 * z
-        if self.kind == "radial_outer":
-            return z + 0.0 * rho, 2.0 * r0 - rho + 0.0 * z
-        return rho - r0 + 0.0 * z, z + r0 + 0.0 * rho
+        """(x, r) (mm) of drive-meridian points (rho, z) (mm): the inverse of :meth:`to_drive`
+        (M is orthogonal, so its inverse is its transpose)."""
+        ((a, b), (c, d)), (e, f) = self.affine
+        u = np.asarray(rho, dtype=np.float64) - e
+        v = np.asarray(z, dtype=np.float64) - f
+        return a * u + c * v, b * u + d * v
 
     def face_travel(self, a: ArrayLike, a_ref: float, tan_alpha: float) -> NDArray[np.float64]:
         """Axial travel (mm) of the circular spline from its place at ``a_ref`` to position a

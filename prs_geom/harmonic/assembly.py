@@ -62,7 +62,7 @@ __all__ = ["PARTS", "DEFORMATION", "WAVE_GENERATOR_RULE", "POSITION_RULE", "revo
            "build_assembly", "cone_gap", "arc_cone_clearance", "assembly_checks", "mesh_rows",
            "assembly_summary", "section_profile", "face_reference_position", "circular_spline_placement",
            "GENERATOR_THICKNESS", "mapped_generator_mesh", "mapped_generator_deviation", "RATIO_SAMPLES",
-           "measured_ratio"]
+           "measured_ratio", "RIDGE_ARC_SHARE", "circular_spline_arc_bound", "cone_start"]
 
 #: Names of the placed parts, in scene order.
 PARTS = ("circular_spline", "flexspline", "wave_generator")
@@ -92,9 +92,27 @@ def circular_spline_mesh(d: HarmonicDesign, tol: float | None = None) -> trimesh
     prof = circular_spline_profile(d)
     closed = np.concatenate([prof, prof[:1]])
     tol = d.mesh.chord_tolerance_mm if tol is None else tol
-    # the sealed drive's ridge arc takes a quarter of the tolerance (:func:`_ridged_ring`)
-    rev = 0.75 * tol if d.drive.arrangement == "sealed" else tol
+    # the ridge arc's chords take their share of the tolerance, the revolution the rest
+    rev = tol - circular_spline_arc_bound(d, tol)
     return trimesh.creation.revolve(closed, sections=revolution_sections(float(prof[:, 0].max()), rev))
+
+
+#: The share of the chord tolerance the sealed drive's ridge arc takes (its chords' sagitta).
+RIDGE_ARC_SHARE = 0.25
+
+
+def circular_spline_arc_bound(d: HarmonicDesign, tol: float) -> float:
+    """Bound (mm) of the circular spline profile's chord error on an arc at chord tolerance
+    ``tol`` (mm): the sealed drive's ridge (:data:`RIDGE_ARC_SHARE` of it), 0 for the straight
+    cone walls of the other arrangements."""
+    return RIDGE_ARC_SHARE * tol if d.drive.arrangement == "sealed" else 0.0
+
+
+def cone_start(d: HarmonicDesign, a: float) -> float:
+    """x (mm, working section) where the circular spline's cone wall starts at position a:
+    a in the radial drives; the end face's ring keeps its radial place
+    (:func:`face_reference_position`) and moves along the axis."""
+    return face_reference_position(d) if d.arrangement.is_disc else a
 
 
 def flexspline_profile(d: HarmonicDesign, tol: float | None = None) -> np.ndarray:
@@ -172,12 +190,12 @@ def circular_spline_profile(d: HarmonicDesign) -> np.ndarray:
 def _ridged_ring(d: HarmonicDesign) -> np.ndarray:
     """The sealed drive's circular spline (own frame, mm): a ring with a cylindrical bore
     (bore_small_radius_mm) over 0 .. H whose middle carries the working arc as a ridge (centre
-    at z = H / 2, radius arc_centre_radius_mm), counter-clockwise; the arc sampled with half
-    the chord tolerance as sagitta."""
+    at z = H / 2, radius arc_centre_radius_mm), counter-clockwise; the arc's chords within
+    :data:`RIDGE_ARC_SHARE` of the chord tolerance."""
     c = d.circular_spline
     H, b, rs, rc = c.bore_length_mm, c.bore_small_radius_mm, c.arc_radius_mm, c.arc_centre_radius_mm
     half = math.acos((rc - b) / rs)                  # the arc's angle either side of the axis's normal
-    dth = 2 * math.acos(1 - 0.25 * d.mesh.chord_tolerance_mm / rs)
+    dth = 2 * math.acos(1 - RIDGE_ARC_SHARE * d.mesh.chord_tolerance_mm / rs)
     th = np.linspace(half, -half, max(8, int(math.ceil(2 * half / dth)) + 1))
     # from the ridge's upper end (z > H/2) down to its lower end, innermost point at th = 0
     arc = np.column_stack([rc - rs * np.cos(th), 0.5 * H + rs * np.sin(th)])
@@ -632,7 +650,7 @@ def build_assembly(d: HarmonicDesign, a: float | None = None, tol: float | None 
     tol = d.mesh.chord_tolerance_mm if tol is None else float(tol)
     wg = wave_generator(d, a)
     fs = deformed_flexspline(d, a, tol)
-    if d.arrangement.kind in ("radial_inner", "sealed"):
+    if d.arrangement.generator_is_disc:
         generator = (wave_generator_mesh(wg, tol), _translation(wg.z_min_mm))
     else:
         generator = (mapped_generator_mesh(d, wg, tol)[0], np.eye(4))
@@ -703,8 +721,7 @@ def _contact_gaps(d: HarmonicDesign, fs: DeformedFlexspline, a: float) -> list[f
             dist = point_segment_distance(centre, mer[:-1], mer[1:])
             gaps.append(float(np.min(dist)) - c.arc_radius_mm)
             continue
-        # the cone's extent along the section's generatrix: it moves with a in the radial drives
-        x_lo = face_reference_position(d) if d.arrangement.is_disc else a
+        x_lo = cone_start(d, a)
         mer = _section_meridian(d, fs.meridian(k))
         inside = (mer[:, 1] >= x_lo) & (mer[:, 1] <= x_lo + c.bore_length_mm)
         gaps.append(float(np.min(cone_gap(d, mer[inside], a))))
@@ -862,7 +879,7 @@ def mesh_rows(asm: HarmonicAssembly) -> list[dict[str, Any]]:
     wg_mesh, _ = asm.parts["wave_generator"]
     rows = []
     d = asm.design
-    wg_dev = (wave_generator_deviation(asm.wave_generator, wg_mesh) if d.arrangement.kind in ("radial_inner", "sealed")
+    wg_dev = (wave_generator_deviation(asm.wave_generator, wg_mesh) if d.arrangement.generator_is_disc
               else mapped_generator_deviation(d, asm.wave_generator, wg_mesh))
     for name, mesh, measured, bound in (
             ("flexspline", fs_mesh, flexspline_deviation(d, asm.flexspline), asm.flexspline.arc_chord_bound_mm),

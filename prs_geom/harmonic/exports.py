@@ -44,7 +44,7 @@ from prs_geom.geometry.planar import point_segment_distance
 # the parts' undeformed geometry lives with the assembly; these names stay importable from here
 from prs_geom.harmonic.assembly import (circular_spline_mesh, circular_spline_profile,  # noqa: F401
                                         flexspline_mesh, flexspline_profile, revolution_sections)
-from prs_geom.harmonic.assembly import default_position
+from prs_geom.harmonic.assembly import circular_spline_placement, cone_start
 from prs_geom.harmonic.model import HarmonicDesign, contact_point, contact_state, drive_contact, tilt_angle
 
 __all__ = ["revolve_deviation", "ratio_table_csv", "plot_ratio", "plot_drive", "write_dxf", "ASSEMBLY_MATERIALS",
@@ -170,16 +170,14 @@ def _sketch(d: HarmonicDesign, ax: Any) -> None:
             color="C0", lw=2)
     # circular spline: the ring with its conical wall (the end face's ring keeps its radial
     # place and moves along the axis: the same face line)
-    x0, shift = a, 0.0
-    if arr.is_disc:
-        x0 = default_position(d)
-        shift = float(arr.face_travel(a, x0, math.tan(d.alpha)))
+    x0 = cone_start(d, a)
+    shift = circular_spline_placement(d, a) if arr.is_disc else 0.0
     ring = np.array([[x0, c.bore_small_radius_mm], [x0, c.outer_radius_mm],
                      [x0 + c.bore_length_mm, c.outer_radius_mm], [x0 + c.bore_length_mm, c.bore_large_radius_mm],
                      [x0, c.bore_small_radius_mm]])
     fixed = d.drive.fixed_member
     rz, rr = draw(ring[:, 0], ring[:, 1])
-    ax.fill(rz + (shift if arr.is_disc else 0.0), rr, facecolor="0.85" if fixed == "circular_spline" else "none",
+    ax.fill(rz + shift, rr, facecolor="0.85" if fixed == "circular_spline" else "none",
             edgecolor="C1", hatch="///" if fixed == "circular_spline" else None, lw=1.5, label="circular spline")
     # wave generator under the working section's open end
     gx = end[0] - 0.5 * f.arc_radius_mm
@@ -223,8 +221,6 @@ def _mapped_section(d: HarmonicDesign, blk: Any, a: float, beta: float) -> None:
     the distance from it): the tilted generatrix (LINE), the contact arc +-30 deg about the
     contact (LWPOLYLINE of its mapped points) and the circular spline's cone wall (LINE; the
     end face's ring at its radial place, :func:`~prs_geom.harmonic.assembly.face_reference_position`)."""
-    from prs_geom.harmonic.assembly import face_reference_position
-
     f, c, arr = d.flexspline, d.circular_spline, d.arrangement
     r0 = f.neutral_radius_mm
 
@@ -241,7 +237,7 @@ def _mapped_section(d: HarmonicDesign, blk: Any, a: float, beta: float) -> None:
     psi = math.pi / 2 + d.alpha + np.radians(np.linspace(-30.0, 30.0, 61))
     blk.add_lwpolyline(to_dxf(C[0] + f.arc_radius_mm * np.cos(psi), C[1] + f.arc_radius_mm * np.sin(psi)),
                        dxfattribs={"layer": "PROFILE"})
-    x0 = face_reference_position(d) if arr.is_disc else a
+    x0 = cone_start(d, a)
     xs = np.array([x0, x0 + c.bore_length_mm])
     blk.add_line(*to_dxf(xs, c.bore_small_radius_mm + (xs - a) * math.tan(d.alpha)), dxfattribs={"layer": "PROFILE"})
 
@@ -250,7 +246,7 @@ def _sealed_profiles(d: HarmonicDesign, a: float) -> tuple[np.ndarray, np.ndarra
     """The sealed drive's half-section at position a (mm) in the drive frame, as (rho, z)
     polygons: the flexspline's (the conical cup turned by beta about A, the major axis's
     meridian) and the circular spline's (the ridged ring placed with its arc's centre at a)."""
-    from prs_geom.harmonic.assembly import circular_spline_placement, tilt_meridian
+    from prs_geom.harmonic.assembly import tilt_meridian
 
     prof = flexspline_profile(d)
     rho, z = tilt_meridian(d, prof[:, 0], prof[:, 1], float(tilt_angle(d, a)))

@@ -44,7 +44,7 @@ from prs_geom.harmonic.arrangement import (ARRANGEMENTS, NOT_MODELLED, Arrangeme
 from prs_geom.harmonic.drive import (FLEXSPLINE_MATERIALS, FIXED_MEMBERS, StrengthLimit, contact_load,
                                      disc_wave_stress, flexspline_bending_stress, harmonic_ratio,
                                      planetary_stage, strength_limit, tolerance_grade)
-from prs_geom.model.validation import check_name, positive, real, size
+from prs_geom.model.validation import bounded, check_name, positive, real, size
 from prs_geom.model.errors import DesignError
 from prs_geom.model.standards import GRADE_NAMES, it_tolerance_by_name_um
 
@@ -69,10 +69,8 @@ class Flexspline:
     def __post_init__(self) -> None:
         for f in ("neutral_radius_mm", "length_mm", "arc_radius_mm", "arc_centre_offset_mm", "wall_thickness_mm"):
             object.__setattr__(self, f, size(f, getattr(self, f)))
-        ang = real("cone_half_angle_deg", self.cone_half_angle_deg)
-        if not 0.0 <= ang <= 30.0:
-            raise DesignError("cone_half_angle_deg", ang, "must be from 0 to 30 degrees")
-        object.__setattr__(self, "cone_half_angle_deg", ang)
+        object.__setattr__(self, "cone_half_angle_deg", bounded("cone_half_angle_deg", self.cone_half_angle_deg,
+                                                                0.0, 30.0, "must be from 0 to 30 degrees"))
         if self.arc_radius_mm >= self.length_mm:
             raise DesignError("arc_radius_mm", self.arc_radius_mm, f"must be less than length_mm ({self.length_mm})")
         if self.wall_thickness_mm >= 0.5 * self.neutral_radius_mm:
@@ -235,14 +233,10 @@ class Generator:
             raise DesignError("kind", self.kind, 'must be "elliptical" or "planetary"')
         for f in ("sun_radius_mm", "planet_cone_radius_mm", "roller_radius_mm"):
             object.__setattr__(self, f, size(f, getattr(self, f)))
-        ang = real("cone_half_angle_deg", self.cone_half_angle_deg)
-        if not 5.0 <= ang <= 60.0:
-            raise DesignError("cone_half_angle_deg", ang, "must be from 5 to 60 degrees")
-        object.__setattr__(self, "cone_half_angle_deg", ang)
-        k = real("shift_per_position", self.shift_per_position)
-        if not 0.0 <= k <= 1.0:
-            raise DesignError("shift_per_position", k, "must be from 0 to 1 (mm per mm of position a)")
-        object.__setattr__(self, "shift_per_position", k)
+        object.__setattr__(self, "cone_half_angle_deg", bounded("cone_half_angle_deg", self.cone_half_angle_deg,
+                                                                5.0, 60.0, "must be from 5 to 60 degrees"))
+        object.__setattr__(self, "shift_per_position", bounded("shift_per_position", self.shift_per_position, 0.0,
+                                                               1.0, "must be from 0 to 1 (mm per mm of position a)"))
 
 
 #: Comments written above each key of a harmonic design file (unit and meaning).
@@ -641,7 +635,7 @@ def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
     flexspline material (:func:`prs_geom.harmonic.drive.contact_load`)."""
     dr = d.drive
     kind = d.drive.arrangement
-    half_angle, curvature, arc = d.alpha, None, d.flexspline.arc_radius_mm
+    half_angle, curvature, arc = d.arrangement.working_half_angle(d.alpha), None, d.flexspline.arc_radius_mm
     if kind != "radial_inner":
         r_m, r_c = state["contact_radius_mm"], state["cone_radius_mm"]
         delta = np.abs(state["radius_difference_mm"])
@@ -658,7 +652,6 @@ def drive_load(d: HarmonicDesign, state: dict[str, NDArray[np.float64]]):
         else:
             # the face's half-angle about the axis is 90 deg - alpha: its circumferential normal
             # curvature sin(alpha) / rho; the rim's axial wave W cos(2 theta) adds 4 W / rho^2
-            half_angle = 0.5 * math.pi - d.alpha
             wave = (r_m - d.flexspline.neutral_radius_mm) * np.abs(np.sin(state["beta_rad"]))
             curvature = np.abs(math.sin(d.alpha) * (1.0 / r_c - 1.0 / r_m)) + 4.0 * wave / r_m ** 2
     return contact_load(half_angle, arc, d.flexspline.neutral_radius_mm,
@@ -749,7 +742,7 @@ def drive_section(d: HarmonicDesign, rows: list[dict[str, Any]] | None = None) -
     first, last = rows[0], rows[-1]
     signed = f"ratio_{dr.fixed_member}_fixed"
     valid = [r["a_mm"] for r in rows if r["hertz_valid"]]
-    half_angle = 0.5 * math.pi - d.alpha if dr.arrangement == "end_face" else d.alpha
+    half_angle = d.arrangement.working_half_angle(d.alpha)
     return {"arrangement": dr.arrangement, "arrangement_description": ARRANGEMENTS[dr.arrangement],
             "fixed_member": dr.fixed_member, "output": "flexspline" if dr.fixed_member == "circular_spline"
             else "circular_spline", "ratio_at_min_position": first[signed], "ratio_at_max_position": last[signed],
