@@ -36,9 +36,8 @@ from functools import lru_cache
 from prs_geom.geometry.mechanism import layout
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
-from prs_geom.model.machine_elements import (ISO_4762_LENGTHS_MM, Bearing, Bolt, Key, Locknut, ShaftRing, bearing,
-                                             bearing_bores, bolt,
-                                             bolt_sizes, key_for_shaft, key_lengths, locknut, locknut_bores,
+from prs_geom.model.machine_elements import (BOLT_SAFETY, ISO_4762_LENGTHS_MM, Bearing, Bolt, Key, Locknut, ShaftRing,
+                                             bearing, bearing_bores, bolt, load_sized_bolt, key_for_shaft, key_lengths, locknut, locknut_bores,
                                              shaft_end, shaft_end_diameters, shaft_ring)
 from prs_geom.model.standards import StandardTableError
 
@@ -48,8 +47,6 @@ __all__ = ["DESIGN_FILE", "FLANGE_OVERLAP_MM", "ActuatorLayout", "NutMountLayout
 
 #: Source of a size given in the design file.
 DESIGN_FILE = "design file"
-#: Safety of the flange bolts' proof loads on the design load (default bolt size rule).
-BOLT_SAFETY = 2.0
 #: A flange bolt engages this many bolt diameters of thread in the housing (steel or cast iron).
 BOLT_ENGAGEMENT = 1.5
 #: The nut flange reaches this far (mm) inside the nut end's outside radius, so that the two
@@ -357,11 +354,8 @@ def _nut_mount(design: PRSDesign, sz: _Sizer, nut_lo_end: tuple[float, float]) -
     """The flange on the lower nut end (module doc)."""
     m = design.actuator.nut_mount
     D_nut = design.nut.outer_diameter_mm
-    F = design.loading.axial_load_n
-    need = [b for b in bolt_sizes() if m.bolt_count * bolt(b).proof_load_n >= BOLT_SAFETY * F]
-    # no size that carries the load: the largest, and the bolt check of the build fails (an
-    # absurd load gets a failed verdict, not a refusal)
-    name = sz.take("actuator.nut_mount.bolt", m.bolt, need[0] if need else bolt_sizes()[-1],
+    name = sz.take("actuator.nut_mount.bolt", m.bolt,
+                   load_sized_bolt(m.bolt_count, design.loading.axial_load_n) if m.bolt is None else None,
                    f"the smallest ISO 4762 size whose {m.bolt_count} proof loads (class 8.8, ISO 898-1) carry "
                    f"{BOLT_SAFETY:g} x the design load")
     bl = bolt(str(name))

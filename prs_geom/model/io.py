@@ -35,7 +35,7 @@ from typing import Any, Iterator
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, EnvironmentFailure, OutputRefused, key_name, quote
 
-__all__ = ["DESIGN_FORMAT_VERSION", "FIELD_COMMENTS", "MAX_INPUT_BYTES", "MAX_KEY_CHARS", "MAX_NESTING",
+__all__ = ["DESIGN_FORMAT_VERSION", "FIELD_COMMENTS", "OPERATING_FIELDS", "operating_sizes", "MAX_INPUT_BYTES", "MAX_KEY_CHARS", "MAX_NESTING",
            "MAX_TEXT_CHARS", "PRS_KINDS", "build_section", "check_document", "check_format_version",
            "check_output_file", "decode_text", "design_from_dict", "design_hash", "design_to_dict", "dumps_json",
            "dumps_toml", "is_office_lock", "load_design", "load_document", "load_spectrum", "loads_json", "loads_toml",
@@ -179,23 +179,28 @@ FIELD_COMMENTS: dict[str, str] = {
 
 
 # --------------------------------------------------------------------------- dict form
-def design_to_dict(design: PRSDesign) -> dict[str, Any]:
-    """Plain nested dict of a (resolved) design; pitch lists as lists, absent ones omitted."""
+def design_to_dict(design: PRSDesign, omit: frozenset[str] | tuple[str, ...] = ()) -> dict[str, Any]:
+    """Plain nested dict of a (resolved) design; pitch lists as lists, absent ones omitted.
+    ``omit``: dotted field paths (``"loads"``, ``"loading.axial_load_n"``) left out, and not
+    even read."""
 
-    def conv(obj: Any) -> Any:
+    def conv(obj: Any, path: str) -> Any:
         if dataclasses.is_dataclass(obj):
             out = {}
             for f in dataclasses.fields(obj):
+                here = f"{path}.{f.name}" if path else f.name
+                if here in omit:
+                    continue
                 v = getattr(obj, f.name)
                 if v is None:
                     continue
-                out[f.name] = conv(v)
+                out[f.name] = conv(v, here)
             return out
         if isinstance(obj, tuple):
-            return [conv(v) for v in obj]
+            return [conv(v, path) for v in obj]
         return obj
 
-    return conv(design)
+    return conv(design, "")
 
 
 def build_section(cls: type, data: Any, path: str = "") -> Any:
@@ -686,9 +691,38 @@ def load_spectrum(path: str | Path):
         raise DesignError(f"spectrum file {str(path)!r}: {exc.field}", exc.value, exc.rule) from None
 
 
+#: The fields of a planetary roller screw design that say how it is operated and analysed,
+#: not what is made: the design load, the load model's settings, the rating settings and the
+#: support conditions of the buckling and critical-speed checks. :func:`design_hash` leaves
+#: them out, so that a new load case re-issues no drawing, sheet or mesh (their files, and
+#: the stage cache's records of them, stay as they were).
+OPERATING_FIELDS = frozenset({"loading.axial_load_n", "loads", "rating", "supports"})
+
+
+def operating_sizes(design) -> dict[str, Any]:
+    """The sizes of a part that the operating fields set (:data:`OPERATING_FIELDS`): the
+    nut flange's bolt, sized from the design load when the design file gives none
+    (:func:`prs_geom.model.machine_elements.load_sized_bolt`); empty for other designs.
+    What :func:`design_hash` and the stage cache's keys hold in place of the load."""
+    if not isinstance(design, PRSDesign) or not design.actuator.enabled or design.actuator.nut_mount.bolt is not None:
+        return {}
+    from prs_geom.model.machine_elements import load_sized_bolt
+
+    count = design.actuator.nut_mount.bolt_count
+    return {"sized.actuator.nut_mount.bolt": load_sized_bolt(count, design.loading.axial_load_n)}
+
+
 def design_hash(design) -> str:
-    """The first 12 hex digits of the sha256 of the design's TOML text (:func:`dumps_toml`):
-    the short identity the drawings' title blocks and report.html print."""
+    """The design's short identity, printed by the drawings' title blocks (whose revision it
+    is), the machining sheets, the STL headers and report.html: the first 12 hex digits of
+    the sha256 of the design file's fields as canonical JSON, less
+    :data:`OPERATING_FIELDS` for a planetary roller screw (one part definition, one hash,
+    whatever load it is analysed under)."""
     import hashlib
 
-    return hashlib.sha256(dumps_toml(design).encode("utf-8")).hexdigest()[:12]
+    omit = OPERATING_FIELDS if isinstance(design, PRSDesign) else frozenset()
+    kind = getattr(type(design), "FILE_KIND", None)
+    data = {"format_version": DESIGN_FORMAT_VERSION, **({"kind": kind} if kind else {}),
+            **design_to_dict(design, omit), **operating_sizes(design)}
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]

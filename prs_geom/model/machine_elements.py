@@ -25,10 +25,10 @@ from dataclasses import dataclass
 
 from prs_geom.model.standards import StandardTableError, nearest_sizes
 
-__all__ = ["BEARING_SERIES", "BEARING_TABLE", "BOLT_PROOF_STRESS_8_8_MPA", "ISO_4762_LENGTHS_MM", "Bearing", "Bolt", "Key",
-           "Locknut", "ShaftEnd", "ShaftRing", "bearing", "bearing_bores", "bolt", "bolt_sizes", "key_for_shaft",
-           "key_lengths", "locknut", "locknut_bores", "shaft_end", "shaft_end_diameters", "shaft_ring",
-           "shaft_ring_sizes"]
+__all__ = ["BEARING_SERIES", "BEARING_TABLE", "BOLT_PROOF_STRESS_8_8_MPA", "BOLT_SAFETY", "ISO_4762_LENGTHS_MM", "Bearing",
+           "Bolt", "Key", "Locknut", "ShaftEnd", "ShaftRing", "bearing", "bearing_bores", "bolt", "bolt_sizes",
+           "key_for_shaft", "key_lengths", "load_sized_bolt", "locknut", "locknut_bores", "shaft_end",
+           "shaft_end_diameters", "shaft_ring", "shaft_ring_sizes"]
 
 BEARING_TABLE = "ISO 15 (radial bearings, boundary dimensions), dimension series 02 and 03"
 
@@ -291,6 +291,19 @@ ISO_4762_LENGTHS_MM = (8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70
 def bolt_sizes() -> tuple[str, ...]:
     """Bolt names held here (``"M4"`` ...), ascending."""
     return tuple(f"M{r[0]:g}" for r in _BOLT_ROWS)
+
+
+#: Safety of the flange bolts' proof loads (class 8.8, ISO 898-1) over the design load.
+BOLT_SAFETY = 2.0
+
+
+def load_sized_bolt(bolt_count: int, axial_load_n: float) -> str:
+    """The smallest bolt of :func:`bolt_sizes` of which ``bolt_count`` carry
+    :data:`BOLT_SAFETY` times ``axial_load_n`` (N) on their proof loads; the largest when
+    none does (the build's bolt check then fails: an absurd load gets a failed verdict, not a
+    refusal). The one place the design load enters a part's geometry."""
+    need = [b for b in bolt_sizes() if bolt_count * bolt(b).proof_load_n >= BOLT_SAFETY * axial_load_n]
+    return need[0] if need else bolt_sizes()[-1]
 
 
 def bolt(name: str) -> Bolt:
