@@ -9,8 +9,11 @@ Prints
    and its workers'), peak memory, the ratio to the **import baseline**
    ``python -c "import numpy, trimesh"`` timed in the same run (median of 3; goal for the
    default build: <= 6, issue 36) and to the **floor** of the build's own output (numpy
-   filling its triangle count and ``tofile`` of its bytes); the default build's split by
-   stage (``timings_s``); and, for comparison with earlier notes only, the earlier
+   filling its triangle count and ``tofile`` of its bytes), each build with an empty stage
+   cache; the default build's split by stage (``timings_s``); rebuilds of the default design
+   into the same folder with the stage cache of its cold build, after changing only
+   ``loading.axial_load_n`` (20 -> 20.5, 21, 21.5 kN, which size the same flange bolt; goal
+   <= 4 x the import baseline) and with nothing changed; and, for comparison with earlier notes only, the earlier
    "meshing plus every exporter" baseline (:data:`EXPORTERS`), which grows with every slow
    exporter and so cannot show one;
 2. ``prs-geom --help`` and ``prs-geom init`` against ``python -c "import numpy"`` (goal
@@ -34,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -208,6 +212,38 @@ def floor_seconds(triangles: int, nbytes: int, tmp: Path) -> float:
     return best_time(job, 3)
 
 
+def fresh_cache(tmp: Path) -> Path:
+    """Point the builds of this run at a new, empty stage and FE cache (``$PRS_GEOM_CACHE``)."""
+    folder = Path(tempfile.mkdtemp(prefix="cache-", dir=tmp))
+    os.environ["PRS_GEOM_CACHE"] = str(folder)
+    os.environ["PRS_GEOM_STAGE_CACHE"] = "1"
+    return folder
+
+
+def rebuild_ratios(tmp: Path, base: float, repeats: int) -> None:
+    """Rebuilds of the default design into one folder with a warm stage cache: after a load
+    change (the goal of issue 36: <= 4 x the import baseline) and with nothing changed."""
+    fresh_cache(tmp)
+    out = tmp / "rebuild"
+    design = tmp / "load.toml"
+    subprocess.run([sys.executable, "-m", "prs_geom", "init", "--out", str(design), "--quiet"], check=True)
+    text = design.read_text(encoding="utf-8")
+    child_cpu(["build", str(design), "--out", str(out), "--quiet"], out)        # cold: fills the cache
+    loads, same = [], []
+    for k in range(repeats):
+        design.write_text(text.replace("axial_load_n = 20000.0", f"axial_load_n = {20500.0 + 500.0 * k}"),
+                          encoding="utf-8")
+        t0 = time.perf_counter()
+        run_child(["build", str(design), "--out", str(out), "--quiet"])
+        loads.append(time.perf_counter() - t0)
+        same.append(run_child(["build", str(design), "--out", str(out), "--quiet"])[0])
+    reused = json.loads((out / ".prs-geom-manifest.json").read_text(encoding="utf-8")).get("reused_from_cache")
+    w, p = median(loads), median(same)
+    print(f"   default, rebuilt after a load change   wall {w:6.2f} s; wall / import {w / base:5.1f} (goal <= 4)")
+    print(f"   default, rebuilt with nothing changed  wall {p:6.2f} s; wall / import {p / base:5.1f}; "
+          f"reused {len(reused or [])} of 12 stages")
+
+
 def build_ratios(tmp: Path, repeats: int) -> None:
     """Section 1: per design of :data:`DESIGNS`, the median of ``repeats`` cold builds (wall,
     CPU, peak), its ratio to the import baseline measured in this run (goal: the default
@@ -218,7 +254,10 @@ def build_ratios(tmp: Path, repeats: int) -> None:
     for label, example in DESIGNS.items():
         out = tmp / label.replace(" ", "_")
         argv = ["build", *([str(root / example)] if example else []), "--out", str(out), "--quiet"]
-        runs = [child_cpu(argv, out) for _ in range(repeats)]
+        runs = []
+        for _ in range(repeats):
+            fresh_cache(tmp)            # a cold build: nothing to reuse
+            runs.append(child_cpu(argv, out))
         wall, cpu, peak = median([r[0] for r in runs]), median([r[1] for r in runs]), max(r[2] for r in runs)
         report = json.loads((out / "report.json").read_text(encoding="utf-8"))
         tris = int(report["assembly"]["triangles"])
@@ -231,13 +270,14 @@ def build_ratios(tmp: Path, repeats: int) -> None:
         if example is None:
             for groups in ("meshes", "sheets"):
                 o = tmp / f"only_{groups}"
-                w = median([child_cpu(["build", "--only", groups, "--out", str(o), "--quiet"], o)[0]
-                            for _ in range(repeats)])
+                w = median([(fresh_cache(tmp), child_cpu(["build", "--only", groups, "--out", str(o), "--quiet"], o))
+                            [1][0] for _ in range(repeats)])
                 print(f"   default --only {groups:8s} wall {w:6.2f} s; wall / import {w / base:5.1f}")
             stages = report["timings_s"]
             print("   default build, stage work (s, wherever it ran; with workers the sum exceeds the wall):")
             for name, sec in stages.items():
                 print(f"     {name:14s} {sec:7.3f} s")
+            rebuild_ratios(tmp, base, repeats)
 
 
 def best_child(argv: list[str], repeats: int, out: Path | None = None, code: str = CHILD) -> tuple[float, int]:
@@ -330,6 +370,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmpname:
         tmp = Path(tmpname)
         build_ratios(tmp, 3)
+        # the later sections measure cold builds (the same design again and again): no stage cache
+        os.environ["PRS_GEOM_STAGE_CACHE"] = "0"
         if args.builds_only:
             return
         out = tmp / "default"

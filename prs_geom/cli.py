@@ -242,6 +242,10 @@ def _add_build_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
     p.add_argument("--force", action="store_true",
                    help="replace files of an earlier output that were edited since prs-geom wrote them "
                         "(refused otherwise)")
+    p.add_argument("--no-cache", action="store_true",
+                   help="compute every stage (and the FE influence matrices) afresh instead of reusing the "
+                        "cached results of stages whose inputs did not change; the outputs are the same "
+                        "(docs/cache.md)")
     _add_compliance_arg(p)
     _add_budget_arg(p)
     p.set_defaults(func=cmd_build)
@@ -272,7 +276,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     only = tuple(g.strip() for g in args.only.split(",")) if args.only is not None else ()
     options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step, only=only)
     report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options,
-                   force=args.force, source=args.design)
+                   force=args.force, source=args.design, cache=False if args.no_cache else None)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
     for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
         print(f"warning: {msg}", file=sys.stderr)

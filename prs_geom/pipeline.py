@@ -17,7 +17,9 @@ so on, see README "Python API").
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,6 +54,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
     from prs_geom.runtime.pool import Background, Job
+    from prs_geom.runtime.stage_cache import StageCache, StageRecord
     from prs_geom.analysis.fe.cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
 
@@ -297,7 +300,8 @@ OUTPUT_GROUPS: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
     "drawings": (frozenset({"pitch", "contact", "manufacturing"}), ("drawing_*.dxf", "drawings.pdf",
                                                                     "profiles.dxf")),
     "plots": (frozenset({"pitch", "contact", "loads", "rating", "tolerance"}), ("*.png", "*.svg")),
-    "parts_list": (frozenset({"pitch", "contact", "meshes", "mechanism"}), ("parts_list.csv", "parts_list.xlsx")),
+    "parts_list": (frozenset({"pitch", "contact", "meshes", "mechanism", "actuator"}),
+                   ("parts_list.csv", "parts_list.xlsx")),
     "html": (frozenset(), ("report.html",)),    # every stage: the page reports them all
 }
 """The output groups ``--only`` selects: group -> (the stages it needs, their upstream ones
@@ -365,6 +369,18 @@ class BuildContext:
     waited: dict[str, float] = field(default_factory=dict)
     #: the stage running now
     current_stage: str = ""
+    #: the stage cache of this build (None: every stage computes; :mod:`prs_geom.build_cache`)
+    cache: "StageCache | None" = None
+    #: stage -> (key, description) of this build's stages (empty without a cache)
+    keys: dict[str, tuple[str, str]] = field(default_factory=dict)
+    #: the records the cache gave, by stage: those stages are restored, not run
+    hits: dict[str, "StageRecord"] = field(default_factory=dict)
+    #: what each plot job drew: job -> (file names, SVG texts by plot)
+    plot_outputs: dict[str, tuple[list[str], dict[str, str]]] = field(default_factory=dict)
+    #: times :meth:`collect_plots` flattened the file list, and its length then
+    flattened: tuple[int, int] = (0, 0)
+    #: SHA-256 of the output files whose content the cache knows (restored or stored)
+    known_sha256: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.results is None:
@@ -375,6 +391,11 @@ class BuildContext:
     def runs(self, stage: str) -> bool:
         """Whether ``stage`` is one of this run's stages."""
         return any(name == stage for name, _ in self.stages)
+
+    def computes(self, stage: str) -> bool:
+        """Whether ``stage`` runs and computes its result (its record is not restored from
+        the cache)."""
+        return self.runs(stage) and stage not in self.hits
 
     def submit(self, stage: str, fn: Callable[..., Any], *args: Any, progress: bool = False, **kwargs: Any) -> None:
         """Start ``fn(*args, **kwargs)``, the background work of ``stage``, in a worker process
@@ -416,12 +437,13 @@ class BuildContext:
         files = []
         for entry in self.results.files:
             if isinstance(entry, _Pending):
-                names, svgs = self.take(entry.job)
+                names, svgs = self.plot_outputs[entry.job] = self.take(entry.job)
                 files += names
                 self.plots_svg.update(svgs)
             else:
                 files.append(entry)
         self.results.files[:] = files
+        self.flattened = (self.flattened[0] + 1, len(files))
 
     def write_text(self, name: str, text: str) -> Path:
         path = self.out / name
@@ -455,9 +477,15 @@ def stage_pitch(ctx: BuildContext) -> None:
 def stage_contact(ctx: BuildContext) -> None:
     """Analytic contact points and the theoretical screw pitch diameter (solved once)."""
     ctx.results.contact = analyse_contact(ctx.design)
-    if ctx.runs("checks"):
+    start_contact_jobs(ctx)
+
+
+def start_contact_jobs(ctx: BuildContext) -> None:
+    """Start what needs only the design and the contact result, in workers, for the stages
+    that will compute (not restore) their results: the checks and the drawings."""
+    if ctx.computes("checks"):
         ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
-    if ctx.runs("manufacturing") and ctx.options.wants("drawings"):
+    if ctx.computes("manufacturing") and ctx.options.wants("drawings"):
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
         ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
@@ -557,23 +585,40 @@ def mesh_checks_job(design: PRSDesign, parts: dict[str, Any], progress: Progress
 def stage_meshes(ctx: BuildContext) -> None:
     """Thread meshes, assembly, mesh checks (``checks.meshes``; in a worker while the meshes
     are written, taken at the checks stage) and mesh exports."""
+    from prs_geom.exports.html import scene_payload
     from prs_geom.exports.meshes import export_meshes
     from prs_geom.mesh.assembly import build_assembly, build_part
 
     d = ctx.design
     # the screw of every export is the theoretical one (the state the analysis certifies)
     asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.results.contact.screw_profile)
-    if ctx.runs("checks"):
-        ctx.submit("meshes", mesh_checks_job, d, asm.parts, progress=True)
-        ctx.results.meshes = MeshStage(asm, [])
-    else:
-        rows = mesh_checks_job(d, asm.parts, ctx.progress)
-        ctx.results.meshes = MeshStage(asm, rows)
+    ctx.results.meshes = MeshStage(asm)
+    start_mesh_checks(ctx)
+    if ctx.runs("html"):
+        # report.html's 3D view, at the display tolerance: with the meshes, whose inputs it has
+        ctx.results.meshes = MeshStage(asm, scene_payload(d, screw_profile=ctx.results.contact.screw_profile))
     nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.results.files.append(name)
+    for part in asm.complete_parts().values():
+        part.edge_check()      # report.json's closed/shells, found once with the meshes they check
     if ctx.options.step:
         _write_step_files(ctx, asm)
+
+
+def start_mesh_checks(ctx: BuildContext) -> None:
+    """The mesh checks: started in a worker and taken by the checks stage when that stage
+    computes; none when its record comes from the cache (which holds them); run here when
+    the build has no checks stage (``--only meshes``) and they are not known yet."""
+    parts = ctx.results.meshes.assembly.parts
+    if ctx.computes("checks"):
+        ctx.submit("meshes", mesh_checks_job, ctx.design, parts, progress=True)
+    elif not ctx.runs("checks") and ctx.results.mesh_checks is None:
+        ctx.results.mesh_checks = mesh_checks_job(ctx.design, parts, ctx.progress)
+
+
+#: What a stage starts for later ones, run after it whether it computed or was restored.
+_STARTS: dict[str, Callable[["BuildContext"], None]] = {"contact": start_contact_jobs, "meshes": start_mesh_checks}
 
 
 def _bounds(part: Any) -> NDArray[np.float64]:
@@ -628,13 +673,14 @@ def checks_job(design: PRSDesign, contact: ContactResult, progress: ProgressFn =
 
 
 def stage_checks(ctx: BuildContext) -> None:
-    """The mesh checks started by the meshes stage (when it ran), then the checks of
-    :func:`checks_job` started after the contact stage."""
+    """The mesh checks started by the meshes stage (run here when that stage's record came
+    from the cache), then the checks of :func:`checks_job` started after the contact stage."""
     if "meshes" in ctx.jobs:
-        rows = ctx.take("meshes")
-        ctx.results.meshes = MeshStage(ctx.results.meshes.assembly, rows)
+        ctx.results.mesh_checks = ctx.take("meshes")
+    elif ctx.results.mesh_checks is None:
+        ctx.results.mesh_checks = mesh_checks_job(ctx.design, ctx.results.meshes.assembly.parts, ctx.progress)
     ctx.results.checks = checks = ctx.take("checks")
-    ctx.results.warnings += check_warnings(ctx.results.meshes.checks if ctx.results.meshes else None, checks)
+    ctx.results.warnings += check_warnings(ctx.results.mesh_checks, checks)
 
 
 def _build_date() -> str:
@@ -683,7 +729,6 @@ def stage_mechanism(ctx: BuildContext) -> None:
     parts_list.csv and parts_list.xlsx)."""
     from prs_geom.exports.bom import parts_list, parts_list_csv, write_parts_list_xlsx
     from prs_geom.mesh.volumes import part_volumes
-    from prs_geom.geometry.actuator import actuator_layout, stroke_end_checks
     from prs_geom.geometry.mechanism import layout
 
     d = ctx.design
@@ -694,11 +739,6 @@ def stage_mechanism(ctx: BuildContext) -> None:
 
         ctx.results.mechanism = check_mechanism(asm, lay, lay.ring.designation)
         ctx.results.warnings += mechanism_warnings(ctx.results.mechanism)
-    act = actuator_layout(d)
-    if act is not None:
-        # the engagement is the same all along the stroke: only the ends are checked there
-        ctx.results.actuator = ActuatorStage(act, stroke_end_checks(d, act))
-        ctx.results.warnings += actuator_warnings(ctx.results.actuator)
     from prs_geom.analysis.kinematics import check_kinematic_sizing, kinematics
 
     try:
@@ -711,6 +751,20 @@ def stage_mechanism(ctx: BuildContext) -> None:
     ctx.results.parts_list = rows
     ctx.write_text("parts_list.csv", parts_list_csv(rows, d.name))
     write_parts_list_xlsx(rows, ctx.add_file("parts_list.xlsx"), d.name, __version__, _build_date())
+
+
+def stage_actuator(ctx: BuildContext) -> None:
+    """The actuator's screw ends, supports and nut flange at the two stroke ends
+    (``actuator``): a stage of its own because its flange-bolt check compares the bolts'
+    proof loads with the design load, which nothing else of the mechanism reads."""
+    from prs_geom.geometry.actuator import actuator_layout, stroke_end_checks
+
+    d = ctx.design
+    act = actuator_layout(d)
+    if act is not None:
+        # the engagement is the same all along the stroke: only the ends are checked there
+        ctx.results.actuator = ActuatorStage(act, stroke_end_checks(d, act))
+        ctx.results.warnings += actuator_warnings(ctx.results.actuator)
 
 
 def stage_html(ctx: BuildContext) -> None:
@@ -733,15 +787,146 @@ STAGES: list[tuple[str, Callable[[BuildContext], None]]] = [
     ("tolerance", stage_tolerance),
     ("meshes", stage_meshes),
     ("mechanism", stage_mechanism),
+    ("actuator", stage_actuator),
     ("checks", stage_checks),
     ("manufacturing", stage_manufacturing),
     ("html", stage_html),
 ]
 
 
+#: BuildResults fields no stage owns: the design, the product line, and those a record keeps
+#: in its own form (warnings, files) or not at all (timings)
+_SHARED_FIELDS = frozenset({"design", "kind", "warnings", "files", "timings_s"})
+
+
+@dataclass
+class _StageMark:
+    """What the build results held when a stage began, to tell what the stage added."""
+
+    values: dict[str, Any]
+    warnings: int
+    files: int
+    flattened: int
+
+    @classmethod
+    def of(cls, ctx: BuildContext) -> "_StageMark":
+        values = {f: getattr(ctx.results, f) for f in _result_fields()}
+        return cls(values, len(ctx.results.warnings), len(ctx.results.files), ctx.flattened[0])
+
+    def added(self, ctx: BuildContext) -> tuple[dict[str, Any], list[str], list[Any]]:
+        """The result fields the stage set, the warnings and the file entries it added
+        (plot placeholders included)."""
+        res = ctx.results
+        changed = {f: getattr(res, f) for f in _result_fields() if getattr(res, f) is not self.values[f]}
+        start = ctx.flattened[1] if ctx.flattened[0] != self.flattened else self.files
+        return changed, list(res.warnings[self.warnings:]), list(res.files[start:])
+
+
+def _result_fields() -> list[str]:
+    import dataclasses
+
+    return [f.name for f in dataclasses.fields(BuildResults) if f.name not in _SHARED_FIELDS]
+
+
+@dataclass(frozen=True)
+class CachePlan:
+    """A build's stage cache, the key of each of its stages and the records found for them."""
+
+    cache: "StageCache"
+    #: stage -> (key, description)
+    keys: dict[str, tuple[str, str]]
+    #: stage -> the record the cache holds under its key
+    hits: dict[str, "StageRecord"]
+
+    @classmethod
+    def read(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
+        from prs_geom.build_cache import stage_keys
+        from prs_geom.runtime.stage_cache import source_fingerprint
+
+        keys = stage_keys(design, stages, options, _build_date(), source_fingerprint())
+        hits = {}
+        for name in stages:
+            record, _ = cache.read(name, *keys[name], design)
+            if record is not None:
+                hits[name] = record
+        return cls(cache, keys, hits)
+
+    def computes(self, stage: str, stages: list[str]) -> bool:
+        return stage in stages and stage not in self.hits
+
+
+def _restore(ctx: BuildContext, name: str) -> None:
+    """Put the cached record of stage ``name`` in place: results, warnings, files, plots;
+    then start what the stage starts for later ones."""
+    record = ctx.hits[name]
+    for attr, value in record.results.items():
+        setattr(ctx.results, attr, value)
+    ctx.results.warnings += list(record.warnings)
+    for file_name, sha in record.files:
+        path = ctx.out / file_name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(ctx.cache.blob(sha), path)
+        ctx.known_sha256[file_name] = sha
+        ctx.results.files.append(file_name)
+    ctx.plots_svg.update(record.svgs)
+    start = _STARTS.get(name)
+    if start is not None:
+        start(ctx)
+
+
+def _store_records(ctx: BuildContext, added: dict[str, tuple[dict[str, Any], list[str], list[Any]]]) -> list[str]:
+    """Write the record of every stage this build computed; returns the stages whose
+    results the record format does not carry (they run every time)."""
+    from prs_geom.runtime.stage_cache import StageRecord, Uncacheable, file_sha256
+
+    uncacheable = []
+    for name, (results, warnings, entries) in added.items():
+        files, svgs = [], {}
+        for entry in entries:
+            if isinstance(entry, _Pending):
+                names, drawn = ctx.plot_outputs[entry.job]
+                files += names
+                svgs.update(drawn)
+            else:
+                files.append(entry)
+        hashes = tuple((f, ctx.known_sha256.setdefault(f, file_sha256(ctx.out / f))) for f in files)
+        record = StageRecord(results, tuple(warnings), hashes, svgs)
+        key, description = ctx.keys[name]
+        try:
+            ctx.cache.write(name, key, description, record, {f: ctx.out / f for f in files}, ctx.design)
+        except Uncacheable:
+            uncacheable.append(name)
+    return uncacheable
+
+
+def _needs_workers(ctx: "BuildContext | _Planned") -> bool:
+    """Whether the stages left to compute have background work that pays for worker
+    processes (the checks, the drawings, a tolerance study): a build that restores those
+    from the cache runs in one process."""
+    return ctx.computes("checks") or ctx.computes("manufacturing") or \
+        (ctx.computes("tolerance") and ctx.design.tolerances is not None)
+
+
+@dataclass(frozen=True)
+class _Planned:
+    """A build before it runs, as :func:`_needs_workers` sees it."""
+
+    design: PRSDesign
+    plan: CachePlan
+    stages: list[str]
+
+    def computes(self, stage: str) -> bool:
+        return self.plan.computes(stage, self.stages)
+
+
+def _stage_label(ctx: BuildContext, name: str) -> str:
+    return f"{name} (reused from the cache)" if name in ctx.hits else name
+
+
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
-               options: BuildOptions | None = None, workers: int | None = None) -> BuildContext:
+               options: BuildOptions | None = None, workers: int | None = None,
+               cache: "StageCache | CachePlan | None" = None) -> BuildContext:
     """Run ``stages`` (:data:`STAGES` by default) on a new :class:`BuildContext`; the checks,
     drawings and plots go to worker processes when ``workers`` allows
     (:mod:`prs_geom.runtime.pool`; None: ``$PRS_GEOM_WORKERS`` or the default).
@@ -750,24 +935,44 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     time it waited for background jobs, plus the time of the jobs it started (the checks,
     the drawings of ``manufacturing``, the plots of ``loads``, ``rating``, ``tolerance``),
     wherever they ran. With workers their sum exceeds the build's wall time.
+
+    ``cache`` (a planetary roller screw design only; a :class:`CachePlan` when its records
+    were read already): a stage whose key (:mod:`prs_geom.build_cache`) the cache holds is
+    restored from its record instead of run (``ctx.hits``), and every stage that ran stores
+    its record at the end.
     """
     from prs_geom.runtime.pool import Background
 
     stages = STAGES if stages is None else stages
+    ctx = BuildContext(design=design, out=out, progress=progress, options=options or BuildOptions(),
+                       stages=list(stages))
+    if cache is not None and isinstance(design, PRSDesign):
+        if not isinstance(cache, CachePlan):
+            cache = CachePlan.read(cache, design, [name for name, _ in stages], ctx.options)
+        ctx.cache, ctx.keys, ctx.hits = cache.cache, cache.keys, cache.hits
+        if not _needs_workers(ctx):
+            workers = 0     # what is left (a few plots) is done before worker processes would start
     with Background(workers) as background:
-        ctx = BuildContext(design=design, out=out, progress=progress,
-                           options=options or BuildOptions(), background=background, stages=list(stages))
+        ctx.background = background
+        added = {}
         for name, fn in stages:
             ctx.current_stage = name
-            begin_stage(progress, name)
+            begin_stage(progress, _stage_label(ctx, name))
             t0 = time.perf_counter()
-            fn(ctx)
+            if name in ctx.hits:
+                _restore(ctx, name)
+            else:
+                mark = _StageMark.of(ctx)
+                fn(ctx)
+                added[name] = mark.added(ctx)
             ctx.results.timings_s[name] = time.perf_counter() - t0
-            end_stage(progress, name)
+            end_stage(progress, _stage_label(ctx, name))
         ctx.current_stage = "end"
         ctx.collect_plots()
         for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
             ctx.take(key)
+        if ctx.cache is not None:
+            _store_records(ctx, added)
     timings = ctx.results.timings_s
     for name in timings:
         timings[name] += ctx.worker_seconds.get(name, 0.0) - ctx.waited.get(name, 0.0)
@@ -876,9 +1081,63 @@ def _keep_only(ctx: BuildContext, tmp: Path, only: tuple[str, ...]) -> None:
     ctx.results.files[:] = kept
 
 
+#: Environment variable that turns the stage cache off for builds that do not say (``0``).
+STAGE_CACHE_ENV = "PRS_GEOM_STAGE_CACHE"
+
+
+def _stage_cache() -> "StageCache | None":
+    """The stage cache, or None when ``$PRS_GEOM_STAGE_CACHE`` turns it off."""
+    import os
+
+    from prs_geom.runtime.stage_cache import StageCache
+
+    off = os.environ.get(STAGE_CACHE_ENV, "1").strip().lower() in ("0", "off", "no", "false")
+    return None if off else StageCache()
+
+
+def _build_into(atomic: AtomicOutputDir, ctx: BuildContext, only: tuple[str, ...]) -> dict[str, Any]:
+    """After the stages: what the manifest records of the cache, the ``--only`` selection,
+    report.json; returns the report dict."""
+    if ctx.hits:
+        atomic.extra["reused_from_cache"] = list(ctx.hits)
+    atomic.known_sha256.update(ctx.known_sha256)
+    ctx.results.files.append(REPORT_NAME)
+    if only:
+        _keep_only(ctx, ctx.out, only)
+    report = report_dict(ctx.results)
+    if only:
+        # the stages that did not run have no section; "only" says why
+        report = {k: v for k, v in report.items() if v is not None}
+        report["only"] = list(only)
+    (ctx.out / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+    return report
+
+
+def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory_budget: int | None,
+             cache: bool | None) -> tuple[int, CachePlan | None]:
+    """Before a planetary roller screw build: the refusals that need no work (tables, fits,
+    stack-up, the optional STEP extra), the stage cache's records, and the worker count
+    (:func:`plan_build`, with its memory estimate; none when the meshes and the checks come
+    from the cache)."""
+    from prs_geom.geometry.actuator import actuator_layout
+    from prs_geom.geometry.mechanism import check_layout
+
+    check_layout(design)   # the standard tables, fits and stack-up: refused now, not after the meshing
+    actuator_layout(design)
+    if options.step:
+        from prs_geom.exports.step import require_ocp
+
+        require_ocp()   # a missing extra is known now, not after the meshing
+    stage_cache = _stage_cache() if cache is not False else None
+    plan = CachePlan.read(stage_cache, design, stages, options) if stage_cache is not None else None
+    if plan is not None and not plan.computes("meshes", stages) and not _needs_workers(_Planned(design, plan, stages)):
+        return 0, plan       # the meshes and the checks come from the cache: nothing to fit in memory
+    return plan_build(design, memory_budget)[0], plan
+
+
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
           memory_budget: int | None = None, options: BuildOptions | None = None, *, force: bool = False,
-          source: str | Path | None = None) -> dict[str, Any]:
+          source: str | Path | None = None, cache: bool | None = None) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``: what
     ``prs-geom build`` does.
 
@@ -893,7 +1152,12 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     file the design was read from: when it lies inside ``out_dir`` it is kept byte for
     byte. ``options.only``: write only those output groups (:data:`OUTPUT_GROUPS`) and
     report.json, running only the stages they need; the folder is still replaced whole and its
-    manifest records ``only``. Returns the report dict.
+    manifest records ``only``. ``cache``: None or True reuse the records of stages whose
+    inputs are unchanged since an earlier build and store this build's
+    (:mod:`prs_geom.build_cache`, docs/cache.md); False (``--no-cache``) computes every
+    stage and the FE matrices afresh and stores them again. ``$PRS_GEOM_STAGE_CACHE=0``
+    turns the stage cache off (the test suite's setting). The outputs are the same every way.
+    Returns the report dict.
 
     Examples
     --------
@@ -906,42 +1170,28 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     """
     harmonic = isinstance(design, HarmonicDesign)
     atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
-    workers = None
+    only = options.only if options is not None else ()
+    stages = HARMONIC_STAGES if harmonic else (selected_stages(only) if only else STAGES)
+    workers, cache_plan = None, None
     if not harmonic:
-        from prs_geom.geometry.actuator import actuator_layout
-        from prs_geom.geometry.mechanism import check_layout
-
-        check_layout(design)   # the standard tables, fits and stack-up: refused now, not after the meshing
-        actuator_layout(design)
-        if options is not None and options.step:
-            from prs_geom.exports.step import require_ocp
-
-            require_ocp()   # a missing extra is known now, not after the meshing
-        workers, _ = plan_build(design, memory_budget)
+        workers, cache_plan = _prepare(design, [name for name, _ in stages], options or BuildOptions(),
+                                       memory_budget, cache)
     from prs_geom.mesh.budget import BASE_BYTES, default_budget_bytes
     from prs_geom.runtime.memwatch import MemoryWatch
 
     # the budget holds while the build runs, too (prs_geom.runtime.memwatch): exit 3, nothing written
     watch = MemoryWatch(default_budget_bytes() if memory_budget is None else memory_budget,
                         f"the build of {design.name}", base_bytes=BASE_BYTES)
-    only = options.only if options is not None else ()
     if only and harmonic:
         raise DesignError("--only", ",".join(only), "applies to planetary roller screw builds, not to a harmonic drive")
     if only:
         atomic.extra["only"] = list(only)
+    from prs_geom.runtime.cache import reads_disabled
+
     try:
-        with watch, atomic as tmp:
-            stages = HARMONIC_STAGES if harmonic else (selected_stages(only) if only else None)
-            ctx = run_stages(design, tmp, progress, stages, options, workers=workers)
-            ctx.results.files.append(REPORT_NAME)
-            if only:
-                _keep_only(ctx, tmp, only)
-            report = report_dict(ctx.results)
-            if only:
-                # the stages that did not run have no section; "only" says why
-                report = {k: v for k, v in report.items() if v is not None}
-                report["only"] = list(only)
-            (tmp / REPORT_NAME).write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
+        with watch, atomic as tmp, (reads_disabled() if cache is False else contextlib.nullcontext()):
+            report = _build_into(atomic, run_stages(design, tmp, progress, stages, options, workers=workers,
+                                                    cache=cache_plan if cache is not False else _stage_cache()), only)
     except ResourceLimitError:
         raise
     except OSError as exc:

@@ -7,8 +7,11 @@ os.environ.setdefault("PRS_GEOM_MEMORY_BUDGET", "6G")
 # the suite runs its test files on every core (pytest-xdist): builds do their work in their own
 # process rather than spawning workers of their own; tests/test_golden.py runs both ways
 os.environ.setdefault("PRS_GEOM_WORKERS", "0")
-# the finite-element matrix cache of a test run goes to a folder of its own, never to the
-# user's ~/.cache (each xdist worker has its own; removed at exit)
+# builds in the tests compute every stage: the stage cache is on only in the tests of the
+# cache itself (tests/test_build_cache.py), which set PRS_GEOM_STAGE_CACHE themselves
+os.environ.setdefault("PRS_GEOM_STAGE_CACHE", "0")
+# the finite-element matrix cache and the stage cache of a test run go to a folder of their
+# own, never to the user's ~/.cache (each xdist worker has its own; removed at exit)
 if "PRS_GEOM_CACHE" not in os.environ:
     import atexit
     import shutil

@@ -46,7 +46,6 @@ from typing import Any, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
 
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_solver import LoadModel, RollerLoadResult, solve_loads_rollers
@@ -403,6 +402,8 @@ def clopper_pearson_lower(successes: int, trials: int, level: float = 0.95) -> f
     from ``successes`` out of ``trials``."""
     if successes <= 0:
         return 0.0
+    from scipy import stats     # scipy.stats takes 0.2 s to import: only studies with a confidence need it
+
     return float(stats.beta.ppf(1.0 - level, successes, trials - successes + 1))
 
 
@@ -411,6 +412,8 @@ def quantile_upper_bound(values: NDArray, q: float, level: float = 0.95) -> floa
     population a sample was drawn from: the order statistic X_(k) with the smallest k such that
     P(Binomial(N, q) < k) >= level. None when the sample is too small for that level."""
     v = np.sort(np.asarray(values, dtype=np.float64).ravel())
+    from scipy import stats
+
     k = int(stats.binom.ppf(level, v.size, q)) + 1          # 1-based rank
     return float(v[k - 1]) if k <= v.size else None
 

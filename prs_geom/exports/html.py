@@ -769,11 +769,13 @@ def write_html(path: Path, results: BuildResults, plots_svg: dict[str, str] | No
     for part, sheet in (results.machining or {}).items():
         parts += _machining_html(part, sheet)
     parts.append("<h2 id='design'>Design</h2>" + table(design_rows(design_to_dict(design)), ["field", "value"]))
-    if results.meshes is not None:
-        parts.append(_mesh_checks_html(results.meshes.checks))
+    if results.mesh_checks is not None:
+        parts.append(_mesh_checks_html(results.mesh_checks))
     contact = results.contact
-    payload = json.dumps(scene_payload(design, screw_profile=contact.screw_profile if contact else None)
-                         ).replace("</", "<\\/")
+    scene = results.meshes.scene if results.meshes is not None else None
+    if scene is None:
+        scene = scene_payload(design, screw_profile=contact.screw_profile if contact else None)
+    payload = json.dumps(scene).replace("</", "<\\/")
     three = three_js()
     page = fill_template(page_template("report.html"), {
         "title": html.escape(design.name), "css": page_template("report.css"), "body": page_body(parts),

@@ -74,15 +74,29 @@ def read_manifest(folder: Path) -> dict[str, Any] | None:
     return data
 
 
+#: file_sha256's results by (path, device, inode, size, mtime in ns): a build checks the
+#: folder it replaces up to three times (the command, entering and leaving the temporary
+#: folder), and a file whose identity, size and time did not change is not read again
+_HASHED: dict[tuple[str, int, int, int, int], str] = {}
+
+
 def file_sha256(path: Path) -> str:
     """SHA-256 of a file's bytes, hex."""
     import hashlib
 
+    st = os.stat(path)
+    ident = (str(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+    known = _HASHED.get(ident)
+    if known is not None:
+        return known
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
-    return h.hexdigest()
+    if len(_HASHED) > 4096:
+        _HASHED.clear()
+    _HASHED[ident] = h.hexdigest()
+    return _HASHED[ident]
 
 
 def legacy_manifest(folder: str | os.PathLike[str]) -> bool:
@@ -251,6 +265,9 @@ class AtomicOutputDir:
                 self.keep[src.relative_to(self.target).as_posix()] = read_user_file(src, "design file")
         self.target = check_output_dir(target, force, self.keep)
         self.extra = dict(manifest_extra or {})
+        #: SHA-256 of files whose content the writer knows (copied from a verified cache
+        #: blob, or hashed for the cache already): the manifest takes them as they are
+        self.known_sha256: dict[str, str] = {}
         self.tmp: Path | None = None
         self.cleaned: list[str] = []
 
@@ -294,7 +311,8 @@ class AtomicOutputDir:
                 (self.tmp / name).parent.mkdir(parents=True, exist_ok=True)
                 (self.tmp / name).write_bytes(data)
             files = [e for e in _entries(self.tmp) if (self.tmp / e).is_file() and e != MANIFEST_NAME]
-            hashes = {f: file_sha256(self.tmp / f) for f in files}
+            hashes = {f: (None if f in self.keep else self.known_sha256.get(f)) or file_sha256(self.tmp / f)
+                      for f in files}
             (self.tmp / MANIFEST_NAME).write_text(_manifest(files, True, self.extra, hashes), encoding="utf-8")
             # the target may have changed while we worked: check again right before replacing
             check_output_dir(self.target, self.force, self.keep)

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
-from prs_geom.analysis import tolerance as tol
 from prs_geom.analysis.contact import ContactResult
 from prs_geom.analysis.load_details import FeSummary, HertzContact, LoadModelDetails, ToothTerms
 from prs_geom.analysis.loads import (LoadDistribution, LoadsResult, ModelRisk, ModelRiskCase, RollerLoadResult,
@@ -422,6 +421,8 @@ def tolerances_dict(t: "Tolerances", n: int) -> dict[str, Any]:
 
 
 def _tolerance_cases(study: Any) -> list[dict[str, Any]]:
+    from prs_geom.analysis import tolerance as tol
+
     stats, det, F0 = study.stats, study.deterministic, study.design_load_n
     return [{"load_fraction": F / F0, "load_N": F,
              "worst_ldc": tol.summary(stats.worst[i]),
@@ -439,6 +440,8 @@ def tolerance_section(study: Any) -> dict[str, Any]:
     """The ``tolerance`` section of a :class:`prs_geom.studies.ToleranceStudy`: the error
     model, the worst coefficient and the roller load shares over the samples, per load and
     overall, the importance ranking and, with a confidence, the quantile it holds."""
+    from prs_geom.analysis import tolerance as tol
+
     stats, F0 = study.stats, study.design_load_n
     out = {
         "samples": int(stats.worst.shape[1]), "seed": study.tolerances.seed,
@@ -669,11 +672,13 @@ class PitchLists:
 
 @dataclass(frozen=True)
 class MeshStage:
-    """The meshes stage: the assembly at the design's chord tolerance and its checks
-    (``checks.meshes`` rows of :func:`prs_geom.mesh.thread.mesh_report`)."""
+    """The meshes stage: the assembly at the design's chord tolerance (its checks are
+    :attr:`BuildResults.mesh_checks`)."""
 
     assembly: "Assembly"
-    checks: list[dict[str, Any]]
+    #: the 3D view of report.html: the assembly at the display tolerance
+    #: (:func:`prs_geom.exports.html.scene_payload`; None: made when the page is written)
+    scene: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -708,6 +713,10 @@ class BuildResults:
     #: the tolerance study (:class:`prs_geom.studies.ToleranceStudy`, a layer above the exports)
     tolerance: Any = None
     meshes: MeshStage | None = None
+    #: ``checks.meshes``: each part mesh against its analytic surface
+    #: (:func:`prs_geom.mesh.thread.mesh_report` rows; the checks stage's, or the meshes
+    #: stage's in a build without checks)
+    mesh_checks: list[dict[str, Any]] | None = None
     #: (part, what the STEP writer returned) per STEP file of a ``--step`` build (:func:`step_section`)
     step: tuple[tuple[str, dict[str, Any]], ...] | None = None
     #: the STEP assembly's report entry (:func:`prs_geom.exports.step_assembly.write_step_assembly`)
@@ -778,8 +787,8 @@ def _checks_section(results: BuildResults) -> dict[str, Any]:
         out["meshes"] = results.harmonic_meshes
     if results.harmonic_assembly_checks is not None:
         out["assembly"] = results.harmonic_assembly_checks
-    if results.meshes is not None:
-        out["meshes"] = results.meshes.checks
+    if results.mesh_checks is not None:
+        out["meshes"] = results.mesh_checks
     if results.checks is not None:
         out.update({"fcl": results.checks.fcl, "interference": results.checks.interference})
     return out

@@ -25,7 +25,7 @@ the complete parts all use them, so every one of those numbers describes the sam
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -71,6 +71,8 @@ class CompletePart:
     transforms: NDArray[np.float64]
     purchased: bool = False
     filled_voids_mm3: float = 0.0
+    #: the :meth:`edge_check` result, found on the first call (a part is checked once)
+    _edges: tuple[bool, int] | None = field(default=None, init=False, repr=False)
 
     @property
     def count(self) -> int:
@@ -81,13 +83,16 @@ class CompletePart:
         """(closed, shells): closed when every edge bounds exactly two triangles, run in
         opposite directions (a consistently oriented 2-manifold); shells, the connected
         components of the triangle graph."""
+        if self._edges is not None:
+            return self._edges
         F = self.faces
         directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
         # each directed edge once, and its reverse exactly once
         uniq, counts = np.unique(directed, axis=0, return_counts=True)
         rev = np.unique(directed[:, ::-1], axis=0)
         closed = bool(np.all(counts == 1) and len(uniq) == len(rev) and np.array_equal(uniq, rev))
-        return closed, _shells(len(self.vertices), F)
+        object.__setattr__(self, "_edges", (closed, _shells(len(self.vertices), F)))
+        return self._edges
 
     def report(self) -> dict[str, Any]:
         """The entry of ``assembly.complete_parts`` in report.json."""
@@ -185,7 +190,7 @@ def _components(n: int, F: NDArray[np.int64]) -> tuple[int, NDArray[np.int64]]:
 
 def _shells(n: int, F: NDArray[np.int64]) -> int:
     """Connected shells of a mesh (vertices not used by a face do not count)."""
-    count, label = _components(n, F)
+    _, label = _components(n, F)
     return int(len(np.unique(label[F[:, 0]])))
 
 

@@ -10,7 +10,10 @@ Owns the machinery that is about running a computation, never about what it comp
 * :mod:`~prs_geom.runtime.memwatch`: the guard of a build's resident memory while it runs;
 * :mod:`~prs_geom.runtime.cache`: a keyed, checksummed, atomically written store of arrays
   on disk; the caller supplies the key material (:mod:`prs_geom.analysis.fe.cache` keys the
-  finite-element influence matrices).
+  finite-element influence matrices);
+* :mod:`~prs_geom.runtime.stage_cache`: a build stage's results, warnings and files as a
+  record of that store (no pickles; files kept once per content), which a rebuild restores
+  instead of running the stage (:mod:`prs_geom.build_cache` keys them).
 
 Any layer may use the runtime; the runtime uses nothing of the package above the model
 layer (its errors and its atomic file write), with the one exception recorded in the

@@ -15,32 +15,52 @@ the store never interprets the key material, it only guarantees what it gives ba
 * Writing (:meth:`ArrayStore.write`) goes to a temporary name in the folder and is renamed
   into place, so a reader never sees half a file; a folder that cannot be written is
   reported (False), never raised.
+* ``$PRS_GEOM_NO_CACHE`` set (``prs-geom build --no-cache``): no entry is read, every
+  caller computes afresh and writes its entries again.
 * Where: :func:`stage_dir` ``(stage)`` = ``$PRS_GEOM_CACHE/<stage>`` if set, else
   ``$XDG_CACHE_HOME/prs-geom/<stage>``, else ``~/.cache/prs-geom/<stage>``. Deleting any of
   these folders is always safe.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
-import io
 import os
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
-from prs_geom.model.io import write_file_atomic
+from prs_geom.model.io import atomic_path
 
-__all__ = ["CACHE_ENV", "READ_STATUSES", "ArrayStore", "cache_root", "checksum", "stage_dir"]
+__all__ = ["CACHE_ENV", "NO_CACHE_ENV", "READ_STATUSES", "ArrayStore", "cache_root", "reads_disabled", "checksum", "stage_dir"]
 
 #: Environment variable naming the cache root (one subfolder per stage).
 CACHE_ENV = "PRS_GEOM_CACHE"
+#: Environment variable that, set to anything but empty or ``0``, makes every read a miss.
+NO_CACHE_ENV = "PRS_GEOM_NO_CACHE"
 #: What :meth:`ArrayStore.read` reports: the entry was used ("hit"), there is none
 #: ("absent"), it holds another description ("foreign": not ours to judge), it cannot be
 #: read ("unreadable"), or its key or checksum does not match its contents ("tampered").
 READ_STATUSES = ("hit", "absent", "foreign", "unreadable", "tampered")
 _RESERVED = ("description", "key", "checksum")
+
+
+@contextlib.contextmanager
+def reads_disabled() -> Iterator[None]:
+    """Within the block, every read is a miss (``$PRS_GEOM_NO_CACHE`` set, so worker
+    processes started meanwhile miss too); the environment is restored after."""
+    saved = os.environ.get(NO_CACHE_ENV)
+    os.environ[NO_CACHE_ENV] = "1"
+    try:
+        yield
+    finally:
+        if saved is None:
+            os.environ.pop(NO_CACHE_ENV, None)
+        else:
+            os.environ[NO_CACHE_ENV] = saved
 
 
 def cache_root() -> Path:
@@ -67,7 +87,7 @@ def checksum(key: str, description: str, arrays: dict[str, np.ndarray]) -> str:
     for name in sorted(arrays):
         a = np.ascontiguousarray(arrays[name])
         h.update(f"{name}|{a.dtype.str}|{a.shape}|".encode())
-        h.update(a.tobytes())
+        h.update(a.reshape(-1).view(np.uint8))     # the bytes, without a copy
     return h.hexdigest()
 
 
@@ -89,12 +109,15 @@ class ArrayStore:
 
     def read(self, name: str, key: str, description: str) -> tuple[dict[str, np.ndarray] | None, str]:
         """``(arrays, "hit")`` of the entry, the reserved ``description``, ``key`` and
-        ``checksum`` left out; else ``(None, status)`` with a status of :data:`READ_STATUSES`."""
+        ``checksum`` left out; else ``(None, status)`` with a status of :data:`READ_STATUSES`
+        (``"absent"`` for every entry while ``$PRS_GEOM_NO_CACHE`` is set)."""
+        if os.environ.get(NO_CACHE_ENV, "").strip() not in ("", "0"):
+            return None, "absent"
         try:
             with np.load(self.path(name, key), allow_pickle=False) as z:
                 if str(z["description"]) != description:
                     return None, "foreign"
-                stored = {item: np.array(z[item]) for item in z.files if item not in ("key", "checksum")}
+                stored = {item: z[item] for item in z.files if item not in ("key", "checksum")}
                 if "checksum" not in z.files or str(z["key"]) != key or \
                         str(z["checksum"]) != checksum(key, description, stored):
                     return None, "tampered"
@@ -112,12 +135,13 @@ class ArrayStore:
         if clash:
             raise ValueError(f"array names reserved by the store: {sorted(clash)}")
         stored = {"description": np.array(description), **arrays}
-        buf = io.BytesIO()
-        np.savez(buf, key=np.array(key), checksum=np.array(checksum(key, description, stored)), **stored)
         target = self.path(name, key)
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
-            write_file_atomic(target, buf.getvalue())
+            # written to the file as it is made (a record of a build's meshes is tens of MB:
+            # no second copy in memory), then renamed into place
+            with atomic_path(target) as tmp, open(tmp, "wb") as fh:
+                np.savez(fh, key=np.array(key), checksum=np.array(checksum(key, description, stored)), **stored)
             return True
         except OSError:
             return False
