@@ -29,8 +29,9 @@ Prints
    well under the 16 s a build once took; the exit code must be 130).
 
 ``--quick`` drops n = 200 and 0.1 um (the heavy cases) and uses one repetition.
-Peak memory is the build's maximum resident set size plus that of its largest worker
-process (``resource.getrusage``; an upper bound of what it holds at once). Set
+Peak memory is the largest sum, over the build's process tree (the main process and its
+workers), of the proportional set size (psutil, sampled every 20 ms): what the build holds
+at once, shared library pages counted once. CPU time is summed over that tree too. Set
 ``PRS_GEOM_WORKERS=0`` to measure the serial build.
 """
 from __future__ import annotations
@@ -49,6 +50,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from timing import best_time  # noqa: E402
+
+from prs_geom.pipeline import STAGES  # noqa: E402
 
 #: Runs ``prs-geom ARGV`` in this interpreter's environment and prints its peak RSS (kB) and
 #: its CPU seconds (the process's and its workers').
@@ -159,32 +162,62 @@ def exporters_baseline(out: Path) -> tuple[float, dict[str, float]]:
     return sum(groups.values()), groups
 
 
-def run_child(argv: list[str], code: str = CHILD) -> tuple[float, int]:
-    """(wall seconds, peak resident kB) of ``prs-geom argv`` (or of ``code`` with ``argv``)
-    in a fresh interpreter; the peak is the main process's plus its largest worker's (an
-    upper bound of what the build holds at once)."""
+def watch_tree(argv: list[str], pss: bool = True) -> tuple[float, float, int, int, str]:
+    """Run ``argv`` and watch its process tree (psutil, every 20 ms) until it exits:
+    (wall s, CPU s, peak PSS of the tree in kB, peak RSS of its largest process in kB,
+    stderr). PSS (proportional set size) counts a page shared by n processes 1/n in each,
+    so the sum is what the tree holds at once; the CPU time is the sum of each process's
+    last observed user + system time (a process that lives less than 20 ms may be missed:
+    the build's workers live for the whole build). resource.getrusage(RUSAGE_CHILDREN)
+    misses worker processes that are not reaped before the parent reads it, as the loky
+    workers are not, and so measured too little. Reading PSS (/proc/<pid>/smaps) costs CPU
+    on a 2-core machine: ``pss=False`` reads the cheap RSS only (peak PSS then 0), for the
+    timed runs."""
+    import psutil
+
     t0 = time.perf_counter()
-    r = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True)
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    root = psutil.Process(proc.pid)
+    cpu: dict[int, float] = {}
+    pss_peak = rss_peak = 0
+    while proc.poll() is None:
+        try:
+            tree = [root] + root.children(recursive=True)
+        except psutil.Error:
+            break
+        held = 0
+        for q in tree:
+            try:
+                info, times = (q.memory_full_info() if pss else q.memory_info()), q.cpu_times()
+            except psutil.Error:
+                continue
+            held += info.pss if pss else 0
+            rss_peak = max(rss_peak, info.rss)
+            cpu[q.pid] = times.user + times.system
+        pss_peak = max(pss_peak, held)
+        time.sleep(0.02 if pss else 0.05)
+    err = proc.stderr.read()
+    proc.wait()
     wall = time.perf_counter() - t0
-    if r.returncode != 0:
-        raise SystemExit(f"prs-geom {' '.join(argv)} failed ({r.returncode}):\n{r.stderr[-2000:]}")
-    fields = next(line for line in r.stderr.splitlines() if line.startswith("PEAK_KB")).split()
-    peak = int(fields[1]) + int(fields[2])
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)} failed ({proc.returncode}):\n{err[-2000:]}")
+    return wall, sum(cpu.values()), pss_peak // 1024, rss_peak // 1024, err
+
+
+def run_child(argv: list[str], code: str = CHILD) -> tuple[float, int]:
+    """(wall seconds, peak kB) of ``prs-geom argv`` (or of ``code`` with ``argv``) in a fresh
+    interpreter; the peak is that of the process tree's PSS (:func:`watch_tree`)."""
+    wall, _, peak, _, _ = watch_tree([sys.executable, "-c", code, *argv])
     return wall, peak
 
 
 def child_cpu(argv: list[str], out: Path) -> tuple[float, float, int]:
     """(wall s, CPU s, peak kB) of one ``prs-geom argv`` in a fresh interpreter, ``out``
-    emptied first."""
+    emptied first (:func:`watch_tree`)."""
     if out.exists():
         shutil.rmtree(out)
-    t0 = time.perf_counter()
-    r = subprocess.run([sys.executable, "-c", CHILD, *argv], capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if r.returncode != 0:
-        raise SystemExit(f"prs-geom {' '.join(argv)} failed ({r.returncode}):\n{r.stderr[-2000:]}")
-    lines = {line.split()[0]: line.split()[1:] for line in r.stderr.splitlines() if line[:6] in ("PEAK_K", "CPU_S ")}
-    return wall, float(lines["CPU_S"][0]), int(lines["PEAK_KB"][0]) + int(lines["PEAK_KB"][1])
+    wall, cpu, _, _, _ = watch_tree([sys.executable, "-c", CHILD, *argv], pss=False)
+    return wall, cpu, 0
 
 
 def median(values: list[float]) -> float:
@@ -241,7 +274,7 @@ def rebuild_ratios(tmp: Path, base: float, repeats: int) -> None:
     w, p = median(loads), median(same)
     print(f"   default, rebuilt after a load change   wall {w:6.2f} s; wall / import {w / base:5.1f} (goal <= 4)")
     print(f"   default, rebuilt with nothing changed  wall {p:6.2f} s; wall / import {p / base:5.1f}; "
-          f"reused {len(reused or [])} of 12 stages")
+          f"reused {len(reused or [])} of {len(STAGES)} stages")
 
 
 def build_ratios(tmp: Path, repeats: int) -> None:
@@ -258,7 +291,10 @@ def build_ratios(tmp: Path, repeats: int) -> None:
         for _ in range(repeats):
             fresh_cache(tmp)            # a cold build: nothing to reuse
             runs.append(child_cpu(argv, out))
-        wall, cpu, peak = median([r[0] for r in runs]), median([r[1] for r in runs]), max(r[2] for r in runs)
+        wall, cpu = median([r[0] for r in runs]), median([r[1] for r in runs])
+        fresh_cache(tmp)
+        shutil.rmtree(out)
+        peak = run_child(argv)[1]       # one more cold build, its memory watched (not timed)
         report = json.loads((out / "report.json").read_text(encoding="utf-8"))
         tris = int(report["assembly"]["triangles"])
         nbytes = sum(f.stat().st_size for f in out.rglob("*") if f.is_file())
@@ -286,7 +322,7 @@ def best_child(argv: list[str], repeats: int, out: Path | None = None, code: str
         if out is not None and out.exists():
             shutil.rmtree(out)
         wall, peak = run_child(argv, code)
-        best = min(best, (wall, peak))
+        best = (min(best[0], wall), max(best[1], peak))
     return best
 
 
