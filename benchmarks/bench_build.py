@@ -53,30 +53,24 @@ from timing import best_time  # noqa: E402
 
 from prs_geom.pipeline import STAGES  # noqa: E402
 
-#: Runs ``prs-geom ARGV`` in this interpreter's environment and prints its peak RSS (kB) and
-#: its CPU seconds (the process's and its workers').
-CHILD = ("import resource, sys\n"
+#: Runs ``prs-geom ARGV`` in this interpreter's environment (its time and memory are watched
+#: from outside, :func:`watch_tree`).
+CHILD = ("import sys\n"
          "from prs_geom import cli\n"
-         "code = cli.main(sys.argv[1:])\n"
-         "me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)\n"
-         "print('PEAK_KB', me.ru_maxrss, kids.ru_maxrss, file=sys.stderr)\n"
-         "print('CPU_S', me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime, file=sys.stderr)\n"
-         "sys.exit(code)\n")
+         "sys.exit(cli.main(sys.argv[1:]))\n")
 #: The import baseline of issue 36: what any numpy-and-trimesh tool pays before it works.
 IMPORT_BASELINE = [sys.executable, "-c", "import numpy, trimesh"]
 #: The designs of section 1: the default, the graded example and the 4-start, 7-roller one.
 DESIGNS = {"default": None, "graded example": "graded-pitch.toml", "4-start 7-roller": "four-start-seven-rollers.toml"}
 
 
-#: Runs :func:`mesh_job` at chord tolerance argv[1] (mm) into the new folder argv[2] and
-#: prints its peak RSS (kB).
-MESH_CHILD = ("import resource, sys\n"
+#: Runs :func:`mesh_job` at chord tolerance argv[1] (mm) into the new folder argv[2].
+MESH_CHILD = ("import sys\n"
               f"sys.path.insert(0, {str(HERE)!r})\n"
               "from pathlib import Path\n"
               "from bench_build import mesh_job\n"
               "out = Path(sys.argv[2]); out.mkdir()\n"
-              "mesh_job(float(sys.argv[1]), out)\n"
-              "print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, 0, file=sys.stderr)\n")
+              "mesh_job(float(sys.argv[1]), out)\n")
 
 
 def mesh_job(tol: float | None, out: Path) -> None:
@@ -140,7 +134,6 @@ EXPORT_CHILD = ("import importlib, json, os, sys, time\n"
                 "t0 = time.perf_counter()\n"
                 "code = cli.main(sys.argv[1:])\n"
                 "print('EXPORT_S', json.dumps({'wall': time.perf_counter() - t0, **spent}), file=sys.stderr)\n"
-                "print('PEAK_KB', 0, 0, file=sys.stderr)\n"
                 "sys.exit(code)\n")
 
 

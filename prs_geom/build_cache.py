@@ -37,7 +37,7 @@ import json
 from typing import Any
 
 from prs_geom.model.design import PRSDesign
-from prs_geom.model.io import OPERATING_FIELDS, design_to_dict, operating_sizes
+from prs_geom.model.io import OPERATING_FIELDS, definition_dict, design_to_dict
 
 __all__ = ["ALL", "DEFINITION", "STAGE_INPUTS", "closure", "covers", "input_values", "inputs", "option_inputs",
            "stage_keys"]
@@ -130,7 +130,7 @@ def _value(design: PRSDesign, path: str) -> Any:
     if path == ALL:
         return design_to_dict(design)
     if path == DEFINITION:
-        return {**design_to_dict(design, OPERATING_FIELDS), **operating_sizes(design)}
+        return definition_dict(design)
     if path.endswith("?"):
         return getattr(design, path[:-1]) is not None
     section, _, name = path.partition(".")
@@ -140,9 +140,15 @@ def _value(design: PRSDesign, path: str) -> Any:
     return repr(value)
 
 
-def input_values(design: PRSDesign, paths: frozenset[str] | tuple[str, ...]) -> dict[str, Any]:
-    """The value of each design path (module docstring), as JSON-ready data."""
-    return {p: _value(design, p) for p in sorted(paths)}
+def input_values(design: PRSDesign, paths: frozenset[str] | tuple[str, ...],
+                 known: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The value of each design path (module docstring), as JSON-ready data; ``known``
+    keeps the values found, for the next stage's paths (the whole design is several stages')."""
+    known = {} if known is None else known
+    for p in paths:
+        if p not in known:
+            known[p] = _value(design, p)
+    return {p: known[p] for p in sorted(paths)}
 
 
 def option_inputs(stage: str, options: Any) -> dict[str, Any]:
@@ -152,7 +158,7 @@ def option_inputs(stage: str, options: Any) -> dict[str, Any]:
     if stage == "manufacturing":
         return {"drawings": options.wants("drawings")}
     if stage == "html":
-        return {name: value for name, value in dataclasses.asdict(options).items()}
+        return dataclasses.asdict(options)
     return {}
 
 
@@ -160,11 +166,11 @@ def stage_keys(design: PRSDesign, stages: list[str], options: Any, date: str,
                fingerprint: str) -> dict[str, tuple[str, str]]:
     """``stage -> (key, description)`` for the stages ``stages`` (module docstring): the
     description is the JSON text of everything the key covers, the key its SHA-256."""
-    out = {}
+    out, known = {}, {}
     for stage in stages:
         description = json.dumps({"stage": stage, "source": fingerprint, "date": date,
                                   "options": option_inputs(stage, options),
-                                  "inputs": input_values(design, closure(stage, design))},
+                                  "inputs": input_values(design, closure(stage, design), known)},
                                  sort_keys=True, allow_nan=True, default=str)
         out[stage] = (hashlib.sha256(description.encode("utf-8")).hexdigest(), description)
     return out

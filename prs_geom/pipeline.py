@@ -369,12 +369,9 @@ class BuildContext:
     waited: dict[str, float] = field(default_factory=dict)
     #: the stage running now
     current_stage: str = ""
-    #: the stage cache of this build (None: every stage computes; :mod:`prs_geom.build_cache`)
-    cache: "StageCache | None" = None
-    #: stage -> (key, description) of this build's stages (empty without a cache)
-    keys: dict[str, tuple[str, str]] = field(default_factory=dict)
-    #: the records the cache gave, by stage: those stages are restored, not run
-    hits: dict[str, "StageRecord"] = field(default_factory=dict)
+    #: the stage cache's keys and records for this build (None: every stage computes;
+    #: :mod:`prs_geom.build_cache`)
+    plan: "CachePlan | None" = None
     #: what each plot job drew: job -> (file names, SVG texts by plot)
     plot_outputs: dict[str, tuple[list[str], dict[str, str]]] = field(default_factory=dict)
     #: times :meth:`collect_plots` flattened the file list, and its length then
@@ -391,6 +388,11 @@ class BuildContext:
     def runs(self, stage: str) -> bool:
         """Whether ``stage`` is one of this run's stages."""
         return any(name == stage for name, _ in self.stages)
+
+    @property
+    def hits(self) -> dict[str, "StageRecord"]:
+        """The records the cache gave, by stage: those stages are restored, not run."""
+        return self.plan.hits if self.plan is not None else {}
 
     def computes(self, stage: str) -> bool:
         """Whether ``stage`` runs and computes its result (its record is not restored from
@@ -833,7 +835,7 @@ class CachePlan:
     """A build's stage cache, the key of each of its stages and the records found for them."""
 
     cache: "StageCache"
-    #: stage -> (key, description)
+    #: stage -> (key, description), for the build's stages in run order
     keys: dict[str, tuple[str, str]]
     #: stage -> the record the cache holds under its key
     hits: dict[str, "StageRecord"]
@@ -851,8 +853,9 @@ class CachePlan:
                 hits[name] = record
         return cls(cache, keys, hits)
 
-    def computes(self, stage: str, stages: list[str]) -> bool:
-        return stage in stages and stage not in self.hits
+    def computes(self, stage: str) -> bool:
+        """Whether ``stage`` is one of the build's and its record is not in the cache."""
+        return stage in self.keys and stage not in self.hits
 
 
 def _restore(ctx: BuildContext, name: str) -> None:
@@ -863,23 +866,20 @@ def _restore(ctx: BuildContext, name: str) -> None:
         setattr(ctx.results, attr, value)
     ctx.results.warnings += list(record.warnings)
     for file_name, sha in record.files:
-        path = ctx.out / file_name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(ctx.cache.blob(sha), path)
+        shutil.copyfile(ctx.plan.cache.blob(sha), ctx.add_file(file_name))
         ctx.known_sha256[file_name] = sha
-        ctx.results.files.append(file_name)
     ctx.plots_svg.update(record.svgs)
     start = _STARTS.get(name)
     if start is not None:
         start(ctx)
 
 
-def _store_records(ctx: BuildContext, added: dict[str, tuple[dict[str, Any], list[str], list[Any]]]) -> list[str]:
-    """Write the record of every stage this build computed; returns the stages whose
-    results the record format does not carry (they run every time)."""
-    from prs_geom.runtime.stage_cache import StageRecord, Uncacheable, file_sha256
+def _store_records(ctx: BuildContext, added: dict[str, tuple[dict[str, Any], list[str], list[Any]]]) -> None:
+    """Write the record of every stage this build computed (not one whose results the
+    record format does not carry: that stage runs every time)."""
+    from prs_geom.runtime.cache import file_sha256
+    from prs_geom.runtime.stage_cache import StageRecord, Uncacheable
 
-    uncacheable = []
     for name, (results, warnings, entries) in added.items():
         files, svgs = [], {}
         for entry in entries:
@@ -889,34 +889,21 @@ def _store_records(ctx: BuildContext, added: dict[str, tuple[dict[str, Any], lis
                 svgs.update(drawn)
             else:
                 files.append(entry)
-        hashes = tuple((f, ctx.known_sha256.setdefault(f, file_sha256(ctx.out / f))) for f in files)
-        record = StageRecord(results, tuple(warnings), hashes, svgs)
-        key, description = ctx.keys[name]
+        for f in files:
+            ctx.known_sha256[f] = file_sha256(ctx.out / f)
+        record = StageRecord(results, tuple(warnings), tuple((f, ctx.known_sha256[f]) for f in files), svgs)
         try:
-            ctx.cache.write(name, key, description, record, {f: ctx.out / f for f in files}, ctx.design)
+            ctx.plan.cache.write(name, *ctx.plan.keys[name], record, {f: ctx.out / f for f in files}, ctx.design)
         except Uncacheable:
-            uncacheable.append(name)
-    return uncacheable
+            pass
 
 
-def _needs_workers(ctx: "BuildContext | _Planned") -> bool:
+def _needs_workers(plan: CachePlan, design: PRSDesign) -> bool:
     """Whether the stages left to compute have background work that pays for worker
     processes (the checks, the drawings, a tolerance study): a build that restores those
     from the cache runs in one process."""
-    return ctx.computes("checks") or ctx.computes("manufacturing") or \
-        (ctx.computes("tolerance") and ctx.design.tolerances is not None)
-
-
-@dataclass(frozen=True)
-class _Planned:
-    """A build before it runs, as :func:`_needs_workers` sees it."""
-
-    design: PRSDesign
-    plan: CachePlan
-    stages: list[str]
-
-    def computes(self, stage: str) -> bool:
-        return self.plan.computes(stage, self.stages)
+    return plan.computes("checks") or plan.computes("manufacturing") or \
+        (plan.computes("tolerance") and design.tolerances is not None)
 
 
 def _stage_label(ctx: BuildContext, name: str) -> str:
@@ -926,7 +913,7 @@ def _stage_label(ctx: BuildContext, name: str) -> str:
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None,
-               cache: "StageCache | CachePlan | None" = None) -> BuildContext:
+               plan: CachePlan | None = None) -> BuildContext:
     """Run ``stages`` (:data:`STAGES` by default) on a new :class:`BuildContext`; the checks,
     drawings and plots go to worker processes when ``workers`` allows
     (:mod:`prs_geom.runtime.pool`; None: ``$PRS_GEOM_WORKERS`` or the default).
@@ -936,22 +923,18 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     the drawings of ``manufacturing``, the plots of ``loads``, ``rating``, ``tolerance``),
     wherever they ran. With workers their sum exceeds the build's wall time.
 
-    ``cache`` (a planetary roller screw design only; a :class:`CachePlan` when its records
-    were read already): a stage whose key (:mod:`prs_geom.build_cache`) the cache holds is
-    restored from its record instead of run (``ctx.hits``), and every stage that ran stores
-    its record at the end.
+    ``plan`` (a planetary roller screw design only; :meth:`CachePlan.read` for ``stages``): a
+    stage whose key (:mod:`prs_geom.build_cache`) the cache holds is restored from its
+    record instead of run (``ctx.hits``), and every stage that ran stores its record at the
+    end.
     """
     from prs_geom.runtime.pool import Background
 
     stages = STAGES if stages is None else stages
     ctx = BuildContext(design=design, out=out, progress=progress, options=options or BuildOptions(),
-                       stages=list(stages))
-    if cache is not None and isinstance(design, PRSDesign):
-        if not isinstance(cache, CachePlan):
-            cache = CachePlan.read(cache, design, [name for name, _ in stages], ctx.options)
-        ctx.cache, ctx.keys, ctx.hits = cache.cache, cache.keys, cache.hits
-        if not _needs_workers(ctx):
-            workers = 0     # what is left (a few plots) is done before worker processes would start
+                       stages=list(stages), plan=plan)
+    if plan is not None and not _needs_workers(plan, design):
+        workers = 0     # what is left (a few plots) is done before worker processes would start
     with Background(workers) as background:
         ctx.background = background
         added = {}
@@ -971,7 +954,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
         ctx.collect_plots()
         for key in list(ctx.jobs):  # a job no stage took (a partial stage list)
             ctx.take(key)
-        if ctx.cache is not None:
+        if plan is not None:
             _store_records(ctx, added)
     timings = ctx.results.timings_s
     for name in timings:
@@ -1128,9 +1111,14 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
         from prs_geom.exports.step import require_ocp
 
         require_ocp()   # a missing extra is known now, not after the meshing
-    stage_cache = _stage_cache() if cache is not False else None
-    plan = CachePlan.read(stage_cache, design, stages, options) if stage_cache is not None else None
-    if plan is not None and not plan.computes("meshes", stages) and not _needs_workers(_Planned(design, plan, stages)):
+    from prs_geom.runtime.cache import reads_disabled
+
+    stage_cache = _stage_cache()
+    if stage_cache is None:
+        return plan_build(design, memory_budget)[0], None
+    with reads_disabled() if cache is False else contextlib.nullcontext():
+        plan = CachePlan.read(stage_cache, design, stages, options)
+    if not plan.computes("meshes") and not _needs_workers(plan, design):
         return 0, plan       # the meshes and the checks come from the cache: nothing to fit in memory
     return plan_build(design, memory_budget)[0], plan
 
@@ -1191,7 +1179,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     try:
         with watch, atomic as tmp, (reads_disabled() if cache is False else contextlib.nullcontext()):
             report = _build_into(atomic, run_stages(design, tmp, progress, stages, options, workers=workers,
-                                                    cache=cache_plan if cache is not False else _stage_cache()), only)
+                                                    plan=cache_plan), only)
     except ResourceLimitError:
         raise
     except OSError as exc:

@@ -81,21 +81,16 @@ _HASHED: dict[tuple[str, int, int, int, int], str] = {}
 
 
 def file_sha256(path: Path) -> str:
-    """SHA-256 of a file's bytes, hex."""
-    import hashlib
+    """SHA-256 of a file's bytes, hex (:func:`prs_geom.runtime.cache.file_sha256`, once per
+    file identity, size and time in a process)."""
+    from prs_geom.runtime.cache import file_sha256 as sha256_of
 
     st = os.stat(path)
     ident = (str(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
-    known = _HASHED.get(ident)
-    if known is not None:
-        return known
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    if len(_HASHED) > 4096:
-        _HASHED.clear()
-    _HASHED[ident] = h.hexdigest()
+    if ident not in _HASHED:
+        if len(_HASHED) > 4096:
+            _HASHED.clear()
+        _HASHED[ident] = sha256_of(path)
     return _HASHED[ident]
 
 

@@ -37,8 +37,8 @@ from prs_geom.geometry.mechanism import layout
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError
 from prs_geom.model.machine_elements import (BOLT_SAFETY, ISO_4762_LENGTHS_MM, Bearing, Bolt, Key, Locknut, ShaftRing,
-                                             bearing, bearing_bores, bolt, load_sized_bolt, key_for_shaft, key_lengths, locknut, locknut_bores,
-                                             shaft_end, shaft_end_diameters, shaft_ring)
+                                             bearing, bearing_bores, bolt, key_for_shaft, key_lengths, load_sized_bolt,
+                                             locknut, locknut_bores, shaft_end, shaft_end_diameters, shaft_ring)
 from prs_geom.model.standards import StandardTableError
 
 __all__ = ["DESIGN_FILE", "FLANGE_OVERLAP_MM", "ActuatorLayout", "NutMountLayout", "PlacedBearing", "ScrewEnd", "ShaftStep", "Sized",

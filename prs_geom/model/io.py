@@ -35,9 +35,10 @@ from typing import Any, Iterator
 from prs_geom.model.design import PRSDesign
 from prs_geom.model.errors import DesignError, EnvironmentFailure, OutputRefused, key_name, quote
 
-__all__ = ["DESIGN_FORMAT_VERSION", "FIELD_COMMENTS", "OPERATING_FIELDS", "operating_sizes", "MAX_INPUT_BYTES", "MAX_KEY_CHARS", "MAX_NESTING",
-           "MAX_TEXT_CHARS", "PRS_KINDS", "build_section", "check_document", "check_format_version",
-           "check_output_file", "decode_text", "design_from_dict", "design_hash", "design_to_dict", "dumps_json",
+__all__ = ["DESIGN_FORMAT_VERSION", "FIELD_COMMENTS", "OPERATING_FIELDS", "MAX_INPUT_BYTES", "MAX_KEY_CHARS",
+           "MAX_NESTING", "MAX_TEXT_CHARS", "PRS_KINDS", "build_section", "check_document", "check_format_version",
+           "check_output_file", "decode_text", "definition_dict", "design_from_dict", "design_hash", "design_to_dict",
+           "dumps_json", "operating_sizes",
            "dumps_toml", "is_office_lock", "load_design", "load_document", "load_spectrum", "loads_json", "loads_toml",
            "parse_document", "read_input_text", "read_user_file", "save_design", "toml_string", "write_file_atomic"]
 
@@ -346,13 +347,14 @@ def loads_toml(text: str, source: str = "<text>", kinds: dict[str, type] | None 
 
 
 # --------------------------------------------------------------------------- JSON
-def _file_dict(design) -> dict[str, Any]:
-    """The dict a design file holds: format version, kind (for other product lines), fields."""
+def _file_dict(design, omit: frozenset[str] = frozenset()) -> dict[str, Any]:
+    """The dict a design file holds: format version, kind (for other product lines), fields
+    (less the dotted paths ``omit``, :func:`design_to_dict`)."""
     kind = getattr(type(design), "FILE_KIND", None)
     head: dict[str, Any] = {"format_version": DESIGN_FORMAT_VERSION}
     if kind is not None:
         head["kind"] = kind
-    return {**head, **design_to_dict(design)}
+    return {**head, **design_to_dict(design, omit)}
 
 
 def dumps_json(design) -> str:
@@ -712,17 +714,20 @@ def operating_sizes(design) -> dict[str, Any]:
     return {"sized.actuator.nut_mount.bolt": load_sized_bolt(count, design.loading.axial_load_n)}
 
 
+def definition_dict(design) -> dict[str, Any]:
+    """What is made: the design file's dict less :data:`OPERATING_FIELDS` (for a planetary
+    roller screw) plus the sizes they set (:func:`operating_sizes`). What
+    :func:`design_hash` and the stage cache's keys of the part stages cover."""
+    omit = OPERATING_FIELDS if isinstance(design, PRSDesign) else frozenset()
+    return {**_file_dict(design, omit), **operating_sizes(design)}
+
+
 def design_hash(design) -> str:
     """The design's short identity, printed by the drawings' title blocks (whose revision it
     is), the machining sheets, the STL headers and report.html: the first 12 hex digits of
-    the sha256 of the design file's fields as canonical JSON, less
-    :data:`OPERATING_FIELDS` for a planetary roller screw (one part definition, one hash,
+    the sha256 of :func:`definition_dict` as canonical JSON (one part definition, one hash,
     whatever load it is analysed under)."""
     import hashlib
 
-    omit = OPERATING_FIELDS if isinstance(design, PRSDesign) else frozenset()
-    kind = getattr(type(design), "FILE_KIND", None)
-    data = {"format_version": DESIGN_FORMAT_VERSION, **({"kind": kind} if kind else {}),
-            **design_to_dict(design, omit), **operating_sizes(design)}
-    text = json.dumps(data, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    text = json.dumps(definition_dict(design), sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:12]

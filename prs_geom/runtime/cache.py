@@ -35,7 +35,8 @@ import numpy as np
 
 from prs_geom.model.io import atomic_path
 
-__all__ = ["CACHE_ENV", "NO_CACHE_ENV", "READ_STATUSES", "ArrayStore", "cache_root", "reads_disabled", "checksum", "stage_dir"]
+__all__ = ["CACHE_ENV", "NO_CACHE_ENV", "READ_STATUSES", "ArrayStore", "cache_root", "checksum", "file_sha256",
+           "reads_disabled", "stage_dir"]
 
 #: Environment variable naming the cache root (one subfolder per stage).
 CACHE_ENV = "PRS_GEOM_CACHE"
@@ -76,6 +77,15 @@ def cache_root() -> Path:
 def stage_dir(stage: str) -> Path:
     """The cache folder of one stage, ``cache_root() / stage``."""
     return cache_root() / stage
+
+
+def file_sha256(path: Path) -> str:
+    """SHA-256 (hex) of a file's bytes, read in 4 MiB blocks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 22), b""):
+            h.update(block)
+    return h.hexdigest()
 
 
 def checksum(key: str, description: str, arrays: dict[str, np.ndarray]) -> str:

@@ -47,9 +47,10 @@ from typing import Any
 import numpy as np
 
 from prs_geom.model.io import atomic_path
-from prs_geom.runtime.cache import ArrayStore, stage_dir
+from prs_geom.runtime.cache import ArrayStore, file_sha256, stage_dir
 
-__all__ = ["BLOB_GRACE_S", "KEEP", "STAGE", "StageCache", "StageRecord", "Uncacheable", "decode", "encode", "file_sha256", "source_fingerprint"]
+__all__ = ["BLOB_GRACE_S", "KEEP", "STAGE", "StageCache", "StageRecord", "Uncacheable", "decode", "encode",
+           "source_fingerprint"]
 
 #: The store's folder name under the cache root.
 STAGE = "stages"
@@ -258,15 +259,6 @@ class StageRecord:
     warnings: tuple[str, ...] = ()
     files: tuple[tuple[str, str], ...] = ()
     svgs: dict[str, str] = field(default_factory=dict)
-
-
-def file_sha256(path: Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 22), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 @dataclass(frozen=True)
