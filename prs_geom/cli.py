@@ -23,6 +23,7 @@ import argparse
 import signal
 import sys
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Sequence
 
@@ -32,7 +33,7 @@ from prs_geom.exports.output import check_output_dir
 from prs_geom.mesh.budget import MEMORY_BUDGET_ENV, parse_size
 from prs_geom.model.errors import (DesignError, DesignWarning, EnvironmentFailure, OutputRefused, PRSGeomError,
                                    ResourceLimitError)
-from prs_geom.model.io import check_output_file, dumps_toml, write_file_atomic
+from prs_geom.model.io import PRS_KINDS, check_output_file, dumps_toml, load_design, write_file_atomic
 from prs_geom.runtime.progress import ConsoleProgress, silent
 
 __all__ = ["EXIT_OK", "EXIT_FOUND", "EXIT_INPUT", "EXIT_ENVIRONMENT", "EXIT_INTERNAL", "EXIT_SIGINT",
@@ -60,13 +61,30 @@ def _memory_budget(args: argparse.Namespace) -> int | None:
     return None if text is None else parse_size(text, "--memory-budget")
 
 
+class _DesignKinds(Mapping):
+    """:data:`prs_geom.pipeline.DESIGN_KINDS` without importing the pipeline (or the harmonic
+    drive's model) to read a screw's design: ``build`` starts a rebuild's plot process
+    before those imports (:func:`_early_plot_process`)."""
+
+    def __getitem__(self, kind: str) -> type:
+        if kind == "harmonic":
+            from prs_geom.harmonic.model import HarmonicDesign
+
+            return HarmonicDesign
+        return PRS_KINDS[kind]
+
+    def __iter__(self):
+        return iter([*PRS_KINDS, "harmonic"])
+
+    def __len__(self) -> int:
+        return len(PRS_KINDS) + 1
+
+
 def _load_any(path: str | None):
     """A PRS or harmonic design (by the file's ``kind``); the default PRS without a file."""
     if path is None:
         return default_design()
-    from prs_geom.pipeline import load_any_design
-
-    return load_any_design(path)
+    return load_design(path, _DesignKinds())
 
 
 def _load(path: str | None) -> PRSDesign:
@@ -253,8 +271,6 @@ def _add_build_parser(sub: "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 def cmd_build(args: argparse.Namespace) -> int:
     """Run every stage and write all exports and report.json into the output folder (its path on stdout)."""
-    from prs_geom.pipeline import build
-
     design = _load_any(args.design)
     _warn(design)
     if args.compliance is not None and not isinstance(design, PRSDesign):
@@ -262,21 +278,28 @@ def cmd_build(args: argparse.Namespace) -> int:
     if isinstance(design, PRSDesign):
         design = _with_compliance(design, args)
     out = Path(args.out) if args.out else Path("exports") / design.name
-    from prs_geom.exports.output import legacy_manifest
+    plot_process = _early_plot_process(design, out, args)
+    try:
+        from prs_geom.exports.output import legacy_manifest
 
-    # every precondition before any work: the output folder (edited files need --force; the
-    # design file may lie inside it) here, the optional extra and the memory in build()
-    check_output_dir(out, force=args.force, keep=_inside(args.design, out))
-    if legacy_manifest(out):
-        print(f"warning: {out} was written by an older prs-geom (its manifest records names, not "
-              f"contents): it is replaced this once without checking for edited files", file=sys.stderr)
-    progress = args.progress
-    from prs_geom.pipeline import BuildOptions
+        # every precondition before any work: the output folder (edited files need --force; the
+        # design file may lie inside it) here, the optional extra and the memory in build()
+        check_output_dir(out, force=args.force, keep=_inside(args.design, out))
+        if legacy_manifest(out):
+            print(f"warning: {out} was written by an older prs-geom (its manifest records names, not "
+                  f"contents): it is replaced this once without checking for edited files", file=sys.stderr)
+        progress = args.progress
+        from prs_geom.pipeline import BuildOptions, build
 
-    only = tuple(g.strip() for g in args.only.split(",")) if args.only is not None else ()
-    options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step, only=only)
+        only = tuple(g.strip() for g in args.only.split(",")) if args.only is not None else ()
+        options = BuildOptions(nominal_screw="nominal" in (args.screw or []), step=args.step, only=only)
+    except BaseException:
+        if plot_process is not None:
+            plot_process.close()
+        raise
     report = build(design, out, progress=progress, memory_budget=_memory_budget(args), options=options,
-                   force=args.force, source=args.design, cache=False if args.no_cache else None)
+                   force=args.force, source=args.design, cache=False if args.no_cache else None,
+                   plot_process=plot_process)
     sizing = design.sizing_warnings() if isinstance(design, PRSDesign) else []
     for msg in report["warnings"][len(sizing):]:   # the sizing warnings were printed above
         print(f"warning: {msg}", file=sys.stderr)
@@ -284,6 +307,29 @@ def cmd_build(args: argparse.Namespace) -> int:
         print(f"wrote {len(report['files'])} files to {out}", file=sys.stderr)
     print(str(out / "report.json"))
     return EXIT_OK
+
+
+def _early_plot_process(design, out: Path, args: argparse.Namespace):
+    """The rebuild's plot process (:mod:`prs_geom.runtime.sidecar`), started now, before the
+    pipeline's imports and the output folder's check, when ``out`` holds a complete build of
+    the same design (its manifest's ``design_sha256``): the designer's loop of a changed load,
+    whose figures are most of the work left. :func:`prs_geom.pipeline.build` keeps it only
+    when the stage cache confirms it; an input error before the build closes it."""
+    from prs_geom.exports.output import read_manifest
+    from prs_geom.model.io import design_hash
+    from prs_geom.runtime.pool import default_workers
+    from prs_geom.runtime.stage_cache import enabled
+
+    if not isinstance(design, PRSDesign) or args.no_cache or args.only is not None or default_workers() <= 0 \
+            or not enabled():
+        return None
+    manifest = read_manifest(out) or {}
+    if not manifest.get("complete") or manifest.get("design_sha256") != design_hash(design):
+        return None
+    from prs_geom.exports.plots import warm_up
+    from prs_geom.runtime.sidecar import Sidecar
+
+    return Sidecar(warm_up)
 
 
 def _print_json(obj) -> None:

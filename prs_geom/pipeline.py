@@ -54,6 +54,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from prs_geom.studies import ToleranceStudy
     from prs_geom.mesh.assembly import Assembly
     from prs_geom.runtime.pool import Background, Job
+    from prs_geom.runtime.sidecar import Sidecar
     from prs_geom.runtime.stage_cache import StageCache, StageRecord
     from prs_geom.analysis.fe.cache import CachedInfluence
     from prs_geom.mesh.budget import Estimate
@@ -356,6 +357,10 @@ class BuildContext:
     #: each stage's result (a new one, with the design's sizing warnings, when not given)
     results: BuildResults | None = None
     plots_svg: dict[str, str] = field(default_factory=dict)
+    #: the stages whose background job was started (taken or not)
+    submitted: set[str] = field(default_factory=set)
+    #: the stages run or restored so far, in order
+    finished: list[str] = field(default_factory=list)
     #: worker processes for the checks, drawings and plots (None: all in this process)
     background: "Background | None" = None
     #: background jobs by the stage whose result they are (``checks``, ``meshes``: the mesh
@@ -397,18 +402,23 @@ class BuildContext:
     def computes(self, stage: str) -> bool:
         """Whether ``stage`` runs and computes its result (its record is not restored from
         the cache)."""
-        return self.runs(stage) and stage not in self.hits
+        return self.runs(stage) and (self.plan is None or self.plan.computes(stage))
 
-    def submit(self, stage: str, fn: Callable[..., Any], *args: Any, progress: bool = False, **kwargs: Any) -> None:
+    def submit(self, stage: str, fn: Callable[..., Any], *args: Any, progress: bool = False, plot: bool = False,
+               **kwargs: Any) -> None:
         """Start ``fn(*args, **kwargs)``, the background work of ``stage``, in a worker process
         when the build has them; else it runs in this process when taken (:meth:`take`), and
-        ``progress=True`` hands it this build's progress callback (a worker reports none)."""
+        ``progress=True`` hands it this build's progress callback (a worker reports none).
+        ``plot=True``: a figure, which the build's plot process draws when it has one
+        (:mod:`prs_geom.runtime.sidecar`)."""
         from prs_geom.runtime.pool import Background
 
         bg = self.background if self.background is not None else Background(0)
         if progress and not bg.workers:
             kwargs["progress"] = self.progress
-        job = self.jobs[stage] = bg.submit(fn, *args, report_progress=progress and bg.workers > 0, **kwargs)
+        job = self.jobs[stage] = bg.submit(fn, *args, report_progress=progress and bg.workers > 0, plot=plot,
+                                           **kwargs)
+        self.submitted.add(stage)
         if job.in_worker:
             watch_job(self.progress, _job_label(stage), job.poll)
 
@@ -425,21 +435,27 @@ class BuildContext:
         self.waited[self.current_stage] = self.waited.get(self.current_stage, 0.0) + waited
         return value
 
-    def add_plot(self, stage: str, plot: Callable[..., list[str]], *args: Any) -> None:
+    def add_plot(self, stage: str, plot: Callable[..., list[str]], *args: Any, matplotlib: bool = True) -> None:
         """Draw the figure of ``stage`` with a plot function of :mod:`prs_geom.exports.plots`
         (in a worker when there are any); its files keep their place in the report's file
-        list, its SVG text goes to ``plots_svg`` when :meth:`collect_plots` runs."""
+        list, its SVG text goes to ``plots_svg`` when :meth:`collect_plots` runs.
+        ``matplotlib=False``: a figure of the light renderer, which the plot process of a
+        rebuild leaves to this process (it costs less than the pickles)."""
         from prs_geom.exports.plots import plot_detached
 
-        self.submit(stage, plot_detached, plot, *args)
+        self.submit(stage, plot_detached, plot, *args, plot=matplotlib)
         self.results.files.append(_Pending(stage))
 
     def collect_plots(self) -> None:
-        """Wait for the plots still drawing; put their files and SVG texts in place."""
+        """Wait for the plots still drawing; put their files and SVG texts in place. The ones
+        that run in this process go first, while the workers draw theirs."""
+        pending = [e.job for e in self.results.files if isinstance(e, _Pending)]
+        for job in sorted(pending, key=lambda j: self.jobs[j].in_worker):
+            self.plot_outputs[job] = self.take(job)
         files = []
         for entry in self.results.files:
             if isinstance(entry, _Pending):
-                names, svgs = self.plot_outputs[entry.job] = self.take(entry.job)
+                names, svgs = self.plot_outputs[entry.job]
                 files += names
                 self.plots_svg.update(svgs)
             else:
@@ -485,9 +501,9 @@ def stage_contact(ctx: BuildContext) -> None:
 def start_contact_jobs(ctx: BuildContext) -> None:
     """Start what needs only the design and the contact result, in workers, for the stages
     that will compute (not restore) their results: the checks and the drawings."""
-    if ctx.computes("checks"):
+    if ctx.computes("checks") and "checks" not in ctx.submitted:
         ctx.submit("checks", checks_job, ctx.design, ctx.results.contact, progress=True)
-    if ctx.computes("manufacturing") and ctx.options.wants("drawings"):
+    if ctx.computes("manufacturing") and ctx.options.wants("drawings") and "manufacturing" not in ctx.submitted:
         from prs_geom.exports.mechanism_drawing import write_all_drawings
 
         ctx.submit("manufacturing", write_all_drawings, ctx.design, ctx.results.contact, ctx.out, _build_date(),
@@ -543,7 +559,7 @@ def stage_rating(ctx: BuildContext) -> None:
     ctx.results.rating = r = analyse_rating(d, ctx.results.contact, loads.model, equal_lists=equal,
                                             robust_note=BUILD_ROBUST_NOTE)
     ctx.results.warnings += rating_warnings(r)
-    ctx.add_plot("rating", plot_rating, ctx.out, d.name, r)
+    ctx.add_plot("rating", plot_rating, ctx.out, d.name, r, matplotlib=False)
 
 
 def stage_tolerance(ctx: BuildContext) -> None:
@@ -614,7 +630,8 @@ def start_mesh_checks(ctx: BuildContext) -> None:
     the build has no checks stage (``--only meshes``) and they are not known yet."""
     parts = ctx.results.meshes.assembly.parts
     if ctx.computes("checks"):
-        ctx.submit("meshes", mesh_checks_job, ctx.design, parts, progress=True)
+        if "meshes" not in ctx.submitted:
+            ctx.submit("meshes", mesh_checks_job, ctx.design, parts, progress=True)
     elif not ctx.runs("checks") and ctx.results.mesh_checks is None:
         ctx.results.mesh_checks = mesh_checks_job(ctx.design, parts, ctx.progress)
 
@@ -839,23 +856,59 @@ class CachePlan:
     keys: dict[str, tuple[str, str]]
     #: stage -> the record the cache holds under its key
     hits: dict[str, "StageRecord"]
+    #: the stages whose stored record is still to be read (:meth:`defer`)
+    pending: set[str] = field(default_factory=set)
+    #: the stages whose record was looked for
+    looked: set[str] = field(default_factory=set)
 
     @classmethod
-    def read(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
+    def keyed(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
+        """The plan's keys, no record read yet (:meth:`read_records`)."""
         from prs_geom.build_cache import stage_keys
         from prs_geom.runtime.stage_cache import source_fingerprint
 
-        keys = stage_keys(design, stages, options, _build_date(), source_fingerprint())
-        hits = {}
-        for name in stages:
-            record, _ = cache.read(name, *keys[name], design)
+        return cls(cache, stage_keys(design, stages, options, _build_date(), source_fingerprint()), {})
+
+    @classmethod
+    def read(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
+        """The plan with the records the cache holds for its keys."""
+        plan = cls.keyed(cache, design, stages, options)
+        plan.read_records(design)
+        return plan
+
+    def stored(self, stage: str) -> bool:
+        """Whether the cache has a record under the key of ``stage`` (not yet read, so not
+        yet known to be sound); never while reads are disabled (``--no-cache``)."""
+        from prs_geom.runtime.cache import reads_enabled
+
+        return stage in self.keys and reads_enabled() and \
+            self.cache.store.path(stage, self.keys[stage][0]).is_file()
+
+    def read_records(self, design: PRSDesign) -> None:
+        """Read the record of each stage now; the sound ones are the hits."""
+        for name in self.keys:
+            self.take(name, design)
+
+    def defer(self) -> None:
+        """Read each stored record only when its stage comes (:meth:`take`): until then the
+        plan counts it as a hit. A build reads the records of a rebuild's meshes and checks
+        (0.2 s) while its plot process draws the new load's figures, not before."""
+        self.pending.update(s for s in self.keys if self.stored(s))
+
+    def take(self, stage: str, design: PRSDesign) -> "StageRecord | None":
+        """The record of ``stage``: read now if it has not been, a hit only when sound."""
+        if stage in self.keys and stage not in self.hits and (stage in self.pending or stage not in self.looked):
+            self.pending.discard(stage)
+            self.looked.add(stage)
+            record, _ = self.cache.read(stage, *self.keys[stage], design)
             if record is not None:
-                hits[name] = record
-        return cls(cache, keys, hits)
+                self.hits[stage] = record
+        return self.hits.get(stage)
 
     def computes(self, stage: str) -> bool:
-        """Whether ``stage`` is one of the build's and its record is not in the cache."""
-        return stage in self.keys and stage not in self.hits
+        """Whether ``stage`` is one of the build's and its record is not in the cache (as far
+        as known: a deferred record counts as a hit until read)."""
+        return stage in self.keys and stage not in self.hits and stage not in self.pending
 
 
 def _restore(ctx: BuildContext, name: str) -> None:
@@ -906,6 +959,17 @@ def _needs_workers(plan: CachePlan, design: PRSDesign) -> bool:
         (plan.computes("tolerance") and design.tolerances is not None)
 
 
+def _start_late(ctx: BuildContext) -> None:
+    """A deferred record that proved unsound when its stage came (:meth:`CachePlan.defer`):
+    the stage computes after all, so start now what the stages before it skipped for it
+    (:data:`_STARTS`; each starts only what was not started yet). Without workers (the plan
+    expected none) the jobs run when taken."""
+    for stage in ctx.finished:
+        start = _STARTS.get(stage)
+        if start is not None:
+            start(ctx)
+
+
 def _stage_label(ctx: BuildContext, name: str) -> str:
     return f"{name} (reused from the cache)" if name in ctx.hits else name
 
@@ -913,7 +977,7 @@ def _stage_label(ctx: BuildContext, name: str) -> str:
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None,
-               plan: CachePlan | None = None) -> BuildContext:
+               plan: CachePlan | None = None, sidecar: "Sidecar | None" = None) -> BuildContext:
     """Run ``stages`` (:data:`STAGES` by default) on a new :class:`BuildContext`; the checks,
     drawings and plots go to worker processes when ``workers`` allows
     (:mod:`prs_geom.runtime.pool`; None: ``$PRS_GEOM_WORKERS`` or the default).
@@ -926,7 +990,8 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     ``plan`` (a planetary roller screw design only; :meth:`CachePlan.read` for ``stages``): a
     stage whose key (:mod:`prs_geom.build_cache`) the cache holds is restored from its
     record instead of run (``ctx.hits``), and every stage that ran stores its record at the
-    end.
+    end. ``sidecar``: the plot process that :func:`_prepare` started for a rebuild; it draws
+    the figures, and is let go (or killed, when the stages fail) here.
     """
     from prs_geom.runtime.pool import Background
 
@@ -935,19 +1000,25 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
                        stages=list(stages), plan=plan)
     if plan is not None and not _needs_workers(plan, design):
         workers = 0     # what is left (a few plots) is done before worker processes would start
-    with Background(workers) as background:
+    with Background(workers, sidecar=sidecar) as background:
         ctx.background = background
         added = {}
         for name, fn in stages:
             ctx.current_stage = name
-            begin_stage(progress, _stage_label(ctx, name))
             t0 = time.perf_counter()
+            if plan is not None:
+                predicted = not plan.computes(name)
+                plan.take(name, design)
+                if predicted and name not in ctx.hits:
+                    _start_late(ctx)
+            begin_stage(progress, _stage_label(ctx, name))
             if name in ctx.hits:
                 _restore(ctx, name)
             else:
                 mark = _StageMark.of(ctx)
                 fn(ctx)
                 added[name] = mark.added(ctx)
+            ctx.finished.append(name)
             ctx.results.timings_s[name] = time.perf_counter() - t0
             end_stage(progress, _stage_label(ctx, name))
         ctx.current_stage = "end"
@@ -1064,23 +1135,17 @@ def _keep_only(ctx: BuildContext, tmp: Path, only: tuple[str, ...]) -> None:
     ctx.results.files[:] = kept
 
 
-#: Environment variable that turns the stage cache off for builds that do not say (``0``).
-STAGE_CACHE_ENV = "PRS_GEOM_STAGE_CACHE"
-
-
 def _stage_cache() -> "StageCache | None":
     """The stage cache, or None when ``$PRS_GEOM_STAGE_CACHE`` turns it off."""
-    import os
+    from prs_geom.runtime.stage_cache import StageCache, enabled
 
-    from prs_geom.runtime.stage_cache import StageCache
-
-    off = os.environ.get(STAGE_CACHE_ENV, "1").strip().lower() in ("0", "off", "no", "false")
-    return None if off else StageCache()
+    return StageCache() if enabled() else None
 
 
 def _build_into(atomic: AtomicOutputDir, ctx: BuildContext, only: tuple[str, ...]) -> dict[str, Any]:
     """After the stages: what the manifest records of the cache, the ``--only`` selection,
     report.json; returns the report dict."""
+    atomic.extra["design_sha256"] = design_hash(ctx.design)     # tells a rebuild of the same design early (cli)
     if ctx.hits:
         atomic.extra["reused_from_cache"] = list(ctx.hits)
     atomic.known_sha256.update(ctx.known_sha256)
@@ -1097,11 +1162,12 @@ def _build_into(atomic: AtomicOutputDir, ctx: BuildContext, only: tuple[str, ...
 
 
 def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory_budget: int | None,
-             cache: bool | None) -> tuple[int, CachePlan | None]:
+             cache: bool | None, started: "Sidecar | None" = None) -> tuple[int, CachePlan | None, "Sidecar | None"]:
     """Before a planetary roller screw build: the refusals that need no work (tables, fits,
-    stack-up, the optional STEP extra), the stage cache's records, and the worker count
+    stack-up, the optional STEP extra), the stage cache's records, the worker count
     (:func:`plan_build`, with its memory estimate; none when the meshes and the checks come
-    from the cache)."""
+    from the cache) and, for a rebuild that has only plots left for workers, its plot
+    process, started before the records are read (:mod:`prs_geom.runtime.sidecar`)."""
     from prs_geom.geometry.actuator import actuator_layout
     from prs_geom.geometry.mechanism import check_layout
 
@@ -1115,17 +1181,55 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
 
     stage_cache = _stage_cache()
     if stage_cache is None:
-        return plan_build(design, memory_budget)[0], None
+        if started is not None:
+            started.close()
+        return plan_build(design, memory_budget)[0], None, None
+    sidecar = None
     with reads_disabled() if cache is False else contextlib.nullcontext():
-        plan = CachePlan.read(stage_cache, design, stages, options)
+        try:
+            plan = CachePlan.keyed(stage_cache, design, stages, options)
+        except BaseException:
+            if started is not None:
+                started.close()
+            raise
+        if cache is not False and _plots_left(plan, design):
+            from prs_geom.runtime.sidecar import Sidecar
+
+            from prs_geom.exports.plots import warm_up
+
+            sidecar = started if started is not None else Sidecar(warm_up)
+        elif started is not None:
+            started.close()
+        plan.defer()
     if not plan.computes("meshes") and not _needs_workers(plan, design):
-        return 0, plan       # the meshes and the checks come from the cache: nothing to fit in memory
-    return plan_build(design, memory_budget)[0], plan
+        return 0, plan, sidecar     # the meshes and the checks come from the cache: nothing to fit in memory
+    try:
+        return plan_build(design, memory_budget)[0], plan, sidecar
+    except BaseException:
+        if sidecar is not None:
+            sidecar.close()
+        raise
+
+
+#: The stages that draw figures (:meth:`BuildContext.add_plot`).
+PLOT_STAGES = ("loads", "rating", "tolerance")
+
+
+def _plots_left(plan: CachePlan, design: PRSDesign) -> bool:
+    """Whether the build, judged by the records its cache holds, will have figures to draw
+    and no work for a pool of workers: then a plot process of its own pays
+    (:mod:`prs_geom.runtime.sidecar`). Never when ``$PRS_GEOM_WORKERS`` is 0."""
+    from prs_geom.runtime.pool import default_workers
+
+    heavy = ("meshes", "checks", "manufacturing") + (("tolerance",) if design.tolerances is not None else ())
+    return default_workers() > 0 and all(plan.stored(s) for s in heavy if s in plan.keys) and \
+        any(s in plan.keys and not plan.stored(s) for s in PLOT_STAGES)
 
 
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
           memory_budget: int | None = None, options: BuildOptions | None = None, *, force: bool = False,
-          source: str | Path | None = None, cache: bool | None = None) -> dict[str, Any]:
+          source: str | Path | None = None, cache: bool | None = None,
+          plot_process: "Sidecar | None" = None) -> dict[str, Any]:
     """Run every stage and write the exports and ``report.json`` to ``out_dir``: what
     ``prs-geom build`` does.
 
@@ -1145,7 +1249,10 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     (:mod:`prs_geom.build_cache`, docs/cache.md); False (``--no-cache``) computes every
     stage and the FE matrices afresh and stores them again. ``$PRS_GEOM_STAGE_CACHE=0``
     turns the stage cache off (the test suite's setting). The outputs are the same every way.
-    Returns the report dict.
+    ``plot_process``: a :class:`~prs_geom.runtime.sidecar.Sidecar` the caller started early
+    (the command line does, before it imports this module, when the output folder holds a
+    build of the same design): the build draws its figures there when its stage records leave
+    it nothing else for workers, and closes it either way. Returns the report dict.
 
     Examples
     --------
@@ -1160,10 +1267,27 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     atomic = AtomicOutputDir(out_dir, {"design": design.name}, force=force, source=source)
     only = options.only if options is not None else ()
     stages = HARMONIC_STAGES if harmonic else (selected_stages(only) if only else STAGES)
-    workers, cache_plan = None, None
-    if not harmonic:
-        workers, cache_plan = _prepare(design, [name for name, _ in stages], options or BuildOptions(),
-                                       memory_budget, cache)
+    sidecar = None
+    try:
+        if harmonic:
+            return _build(design, atomic, stages, progress, memory_budget, options, only, cache, None, None, None)
+        workers, cache_plan, sidecar = _prepare(design, [name for name, _ in stages], options or BuildOptions(),
+                                                memory_budget, cache, plot_process)
+        plot_process = None     # _prepare took it: it is the sidecar, or closed
+        return _build(design, atomic, stages, progress, memory_budget, options, only, cache, workers, cache_plan,
+                      sidecar)
+    finally:
+        for process in (sidecar, plot_process):     # run_stages let it go, unless the build stopped before
+            if process is not None:
+                process.close()
+
+
+def _build(design: PRSDesign | HarmonicDesign, atomic: AtomicOutputDir, stages: Any, progress: ProgressFn,
+           memory_budget: int | None, options: BuildOptions | None, only: tuple[str, ...], cache: bool | None,
+           workers: int | None, cache_plan: CachePlan | None, sidecar: "Sidecar | None") -> dict[str, Any]:
+    """:func:`build` once the job is prepared: the build under its memory watch, into the
+    atomic output folder."""
+    harmonic = isinstance(design, HarmonicDesign)
     from prs_geom.mesh.budget import BASE_BYTES, default_budget_bytes
     from prs_geom.runtime.memwatch import MemoryWatch
 
@@ -1179,7 +1303,7 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
     try:
         with watch, atomic as tmp, (reads_disabled() if cache is False else contextlib.nullcontext()):
             report = _build_into(atomic, run_stages(design, tmp, progress, stages, options, workers=workers,
-                                                    plan=cache_plan), only)
+                                                    plan=cache_plan, sidecar=sidecar), only)
     except ResourceLimitError:
         raise
     except OSError as exc:

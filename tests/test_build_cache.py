@@ -326,10 +326,11 @@ def _same_outputs(a: Path, b: Path) -> None:
 
 
 @pytest.mark.slow
-def test_a_rebuild_reuses_unchanged_stages_and_writes_the_golden_outputs(stage_cache, tmp_path):
+def test_a_rebuild_reuses_unchanged_stages_and_writes_the_golden_outputs(stage_cache, tmp_path, monkeypatch):
     """Cold, then the same design again (every stage from the cache: the golden fingerprint),
     then the design load 20 -> 22 kN (the flange bolt stays M5): only the stages that read
-    the load run, and the outputs equal a build without the cache."""
+    the load run, and the outputs equal a build without the cache; so do they with the plot
+    process of a command-line rebuild, and when a record fails only when read."""
     build(pg.default_design(), tmp_path / "cold", memory_budget=8 * 2 ** 30)
     assert not (json.loads((tmp_path / "cold" / ".prs-geom-manifest.json").read_text())).get("reused_from_cache")
     build(pg.default_design(), tmp_path / "warm", memory_budget=8 * 2 ** 30)
@@ -344,14 +345,43 @@ def test_a_rebuild_reuses_unchanged_stages_and_writes_the_golden_outputs(stage_c
     only = json.loads((tmp_path / "only" / "report.json").read_text())
     assert compare_numbers(golden["report"]["checks"]["meshes"], only["checks"]["meshes"]) == []
 
+    # the designer's loop on the command line, with workers allowed: the rebuild of 22 kN into
+    # the folder of the 20 kN build starts its plot process before the pipeline's imports
+    # (same design_sha256 in the manifest), which draws the load figures; the stage records
+    # are read when their stages come. Only the stages that read the load run, and the outputs
+    # are those of a build without the cache.
+    from prs_geom.cli import main
+    from prs_geom.runtime import sidecar
+
+    started = []
+    real_init = sidecar.Sidecar.__init__
+
+    def counting_init(self, *args, **kwargs):
+        real_init(self, *args, **kwargs)
+        started.append(self)
+
+    monkeypatch.setattr(sidecar.Sidecar, "__init__", counting_init)
+    monkeypatch.setenv("PRS_GEOM_WORKERS", "2")
     d = pg.default_design()
     loaded = d.with_changes(loading=dataclasses.replace(d.loading, axial_load_n=22_000.0))
-    build(loaded, tmp_path / "load", memory_budget=8 * 2 ** 30)
-    assert _reused(tmp_path / "load") == ["pitch", "contact", "gears", "tolerance", "meshes", "mechanism",
+    pg.save_design(loaded, tmp_path / "loaded.toml")
+    assert main(["build", str(tmp_path / "loaded.toml"), "--out", str(tmp_path / "warm"), "--quiet"]) == 0
+    assert len(started) == 1 and started[0]._proc.returncode is not None     # started, and reaped
+    assert _reused(tmp_path / "warm") == ["pitch", "contact", "gears", "tolerance", "meshes", "mechanism",
                                           "checks", "manufacturing"]
+    monkeypatch.setenv("PRS_GEOM_WORKERS", "0")
     build(loaded, tmp_path / "fresh", memory_budget=8 * 2 ** 30, cache=False)
     assert "reused_from_cache" not in json.loads((tmp_path / "fresh" / ".prs-geom-manifest.json").read_text())
-    _same_outputs(tmp_path / "load", tmp_path / "fresh")
+    _same_outputs(tmp_path / "warm", tmp_path / "fresh")
+
+    # a record that proves unsound only when its stage comes (read late): the checks stage
+    # computes after all, its jobs started then (serially: the plan expected no workers)
+    for record in (stage_cache / "stages").glob("checks-*.npz"):
+        record.write_bytes(b"not a zip")
+    assert main(["build", str(tmp_path / "loaded.toml"), "--out", str(tmp_path / "late"), "--quiet"]) == 0
+    late = set(_reused(tmp_path / "late"))
+    assert "checks" not in late and {"contact", "meshes", "manufacturing"} <= late
+    _same_outputs(tmp_path / "late", tmp_path / "fresh")
 
 
 @pytest.mark.slow

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-__all__ = ["save_figure", "plot_detached", "plot_loads", "plot_model_risk", "plot_tolerance", "RATING_LABELS",
+__all__ = ["save_figure", "plot_detached", "warm_up", "plot_loads", "plot_model_risk", "plot_tolerance", "RATING_LABELS",
            "plot_rating"]
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -43,6 +43,18 @@ def _matplotlib() -> Any:
     matplotlib.use("Agg")
     matplotlib.rcParams["svg.hashsalt"] = "prs-geom"
     return matplotlib
+
+
+def warm_up() -> None:
+    """matplotlib imported and set up as for the build's figures, its fonts loaded by a
+    throwaway figure drawn to memory in PNG and SVG: the warm-up of a rebuild's plot process
+    (:mod:`prs_geom.runtime.sidecar`), so that its first figure costs what the later ones do."""
+    fig, ax = _figure(figsize=(2, 1))
+    ax.plot([0, 1], [0, 1], "o-", label="x")
+    ax.set_title("warm")
+    ax.legend()
+    for fmt in ("png", "svg"):
+        fig.savefig(io.BytesIO(), format=fmt, dpi=130, bbox_inches="tight")
 
 
 def __getattr__(name: str) -> Any:

@@ -36,7 +36,7 @@ import numpy as np
 from prs_geom.model.io import atomic_path
 
 __all__ = ["CACHE_ENV", "NO_CACHE_ENV", "READ_STATUSES", "ArrayStore", "cache_root", "checksum", "file_sha256",
-           "reads_disabled", "stage_dir"]
+           "reads_disabled", "reads_enabled", "stage_dir"]
 
 #: Environment variable naming the cache root (one subfolder per stage).
 CACHE_ENV = "PRS_GEOM_CACHE"
@@ -47,6 +47,11 @@ NO_CACHE_ENV = "PRS_GEOM_NO_CACHE"
 #: read ("unreadable"), or its key or checksum does not match its contents ("tampered").
 READ_STATUSES = ("hit", "absent", "foreign", "unreadable", "tampered")
 _RESERVED = ("description", "key", "checksum")
+
+
+def reads_enabled() -> bool:
+    """Whether reads may hit: not while ``$PRS_GEOM_NO_CACHE`` is set (:func:`reads_disabled`)."""
+    return os.environ.get(NO_CACHE_ENV, "").strip() in ("", "0")
 
 
 @contextlib.contextmanager
@@ -121,7 +126,7 @@ class ArrayStore:
         """``(arrays, "hit")`` of the entry, the reserved ``description``, ``key`` and
         ``checksum`` left out; else ``(None, status)`` with a status of :data:`READ_STATUSES`
         (``"absent"`` for every entry while ``$PRS_GEOM_NO_CACHE`` is set)."""
-        if os.environ.get(NO_CACHE_ENV, "").strip() not in ("", "0"):
+        if not reads_enabled():
             return None, "absent"
         try:
             with np.load(self.path(name, key), allow_pickle=False) as z:

@@ -234,8 +234,10 @@ class Background:
     functions, frozen dataclasses, numpy arrays).
     """
 
-    def __init__(self, workers: int | None = None) -> None:
+    def __init__(self, workers: int | None = None, sidecar: Any = None) -> None:
         self.workers = default_workers() if workers is None else workers
+        #: the build's plot process (:class:`prs_geom.runtime.sidecar.Sidecar`), or None
+        self.sidecar = sidecar
         self._pool: Any = None
         self._progress_dir: str | None = None
         self._jobs = 0
@@ -251,12 +253,16 @@ class Background:
         finally:
             self._first.restore()
 
-    def submit(self, fn: Callable[..., Any], *args: Any, report_progress: bool = False, **kwargs: Any) -> Job:
+    def submit(self, fn: Callable[..., Any], *args: Any, report_progress: bool = False, plot: bool = False,
+               **kwargs: Any) -> Job:
         """Run ``fn(*args, **kwargs)`` in a worker (or later, in this process, without workers).
 
         ``report_progress=True`` passes ``progress=`` a :class:`FileProgress` to the function
         in a worker, read back with :meth:`Job.poll`; without workers the caller passes its
-        own callback in ``kwargs``."""
+        own callback in ``kwargs``. ``plot=True``: a figure, drawn by the pool's
+        :attr:`sidecar` when it has one."""
+        if plot and self.sidecar is not None:
+            return Job(self.sidecar.submit(fn, args, kwargs))
         if self.workers <= 0:
             return Job(call=(fn, args, kwargs))
         progress_file = None
@@ -286,7 +292,10 @@ class Background:
         the process group each worker hands its copy to this process, and a second
         KeyboardInterrupt raised in the middle of the clean-up would cut it short."""
         pool, self._pool = self._pool, None
+        sidecar, self.sidecar = self.sidecar, None
         with signals_ignored(kill):
+            if sidecar is not None:
+                sidecar.close()
             if pool is not None and kill:
                 _kill_pool(pool)
             if self._progress_dir is not None:

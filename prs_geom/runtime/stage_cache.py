@@ -49,8 +49,11 @@ import numpy as np
 from prs_geom.model.io import atomic_path
 from prs_geom.runtime.cache import ArrayStore, file_sha256, stage_dir
 
-__all__ = ["BLOB_GRACE_S", "KEEP", "STAGE", "StageCache", "StageRecord", "Uncacheable", "decode", "encode",
-           "source_fingerprint"]
+__all__ = ["BLOB_GRACE_S", "KEEP", "STAGE", "STAGE_CACHE_ENV", "StageCache", "StageRecord", "Uncacheable", "decode",
+           "enabled", "encode", "source_fingerprint"]
+
+#: Environment variable that turns the stage cache off for builds that do not say (``0``).
+STAGE_CACHE_ENV = "PRS_GEOM_STAGE_CACHE"
 
 #: The store's folder name under the cache root.
 STAGE = "stages"
@@ -61,6 +64,12 @@ BLOB_GRACE_S = 600.0
 #: Libraries whose version can change a stage's numbers or file bytes.
 _LIBRARIES = ("numpy", "scipy", "trimesh", "manifold3d", "python-fcl", "ezdxf", "matplotlib", "openpyxl",
               "lib3mf", "scikit-fem", "cadquery-ocp")
+
+
+def enabled() -> bool:
+    """Whether builds use the stage cache: unless ``$PRS_GEOM_STAGE_CACHE`` is ``0`` (or
+    ``off``, ``no``, ``false``)."""
+    return os.environ.get(STAGE_CACHE_ENV, "1").strip().lower() not in ("0", "off", "no", "false")
 
 
 class Uncacheable(TypeError):
