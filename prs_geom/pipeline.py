@@ -1167,7 +1167,9 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
     stack-up, the optional STEP extra), the stage cache's records, the worker count
     (:func:`plan_build`, with its memory estimate; none when the meshes and the checks come
     from the cache) and, for a rebuild that has only plots left for workers, its plot
-    process, started before the records are read (:mod:`prs_geom.runtime.sidecar`)."""
+    process (:mod:`prs_geom.runtime.sidecar`): ``started`` when the caller started one
+    early, else a new one, before the records are read. A ``started`` process it does not
+    return is the caller's to close."""
     from prs_geom.geometry.actuator import actuator_layout
     from prs_geom.geometry.mechanism import check_layout
 
@@ -1181,25 +1183,15 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
 
     stage_cache = _stage_cache()
     if stage_cache is None:
-        if started is not None:
-            started.close()
         return plan_build(design, memory_budget)[0], None, None
     sidecar = None
     with reads_disabled() if cache is False else contextlib.nullcontext():
-        try:
-            plan = CachePlan.keyed(stage_cache, design, stages, options)
-        except BaseException:
-            if started is not None:
-                started.close()
-            raise
+        plan = CachePlan.keyed(stage_cache, design, stages, options)
         if cache is not False and _plots_left(plan, design):
+            from prs_geom.exports.plots import warm_up
             from prs_geom.runtime.sidecar import Sidecar
 
-            from prs_geom.exports.plots import warm_up
-
             sidecar = started if started is not None else Sidecar(warm_up)
-        elif started is not None:
-            started.close()
         plan.defer()
     if not plan.computes("meshes") and not _needs_workers(plan, design):
         return 0, plan, sidecar     # the meshes and the checks come from the cache: nothing to fit in memory
@@ -1273,11 +1265,10 @@ def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: Pro
             return _build(design, atomic, stages, progress, memory_budget, options, only, cache, None, None, None)
         workers, cache_plan, sidecar = _prepare(design, [name for name, _ in stages], options or BuildOptions(),
                                                 memory_budget, cache, plot_process)
-        plot_process = None     # _prepare took it: it is the sidecar, or closed
         return _build(design, atomic, stages, progress, memory_budget, options, only, cache, workers, cache_plan,
                       sidecar)
     finally:
-        for process in (sidecar, plot_process):     # run_stages let it go, unless the build stopped before
+        for process in (sidecar, plot_process):     # the one not used; the used one if run_stages did not run
             if process is not None:
                 process.close()
 

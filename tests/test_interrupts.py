@@ -35,10 +35,11 @@ def _group_alive(pgid: int) -> list[str]:
     return [" ".join(r) for r in rows if len(r) >= 3 and r[0] == str(pgid) and not r[1].startswith("Z")]
 
 
-def _start(design_file: Path, out: Path) -> tuple[subprocess.Popen, list[str]]:
+def _start(design_file: Path, out: Path, extra_env: dict[str, str] | None = None) -> tuple[subprocess.Popen, list[str]]:
     exe = Path(sys.executable).parent / "prs-geom"
     env = {k: v for k, v in os.environ.items() if k != "PRS_GEOM_WORKERS"}   # workers on
     env["TMPDIR"] = str(out.parent)   # so that a progress folder left behind would be seen
+    env.update(extra_env or {})
 
     def child_setup() -> None:
         os.setsid()   # a process group of its own, as a terminal gives a command
@@ -225,6 +226,49 @@ def test_ctrl_c_to_a_study_prints_one_line(tmp_path, where):
         os.killpg(proc.pid, signal.SIGINT)
         _, err = proc.communicate(timeout=120)
         assert proc.returncode == 130 and err.splitlines() == ["interrupted"], err[-3000:]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+@pytest.mark.parametrize("target", ["group", "sidecar"])
+def test_ctrl_c_during_a_rebuild_stops_its_plot_process(tmp_path, target):
+    """A rebuild after a load change (stage cache on) has a plot process of its own
+    (prs_geom.runtime.sidecar) from its start: Ctrl-C to the process group, or SIGINT to the
+    plot process alone (it hands it to the main process), stops the build with one line and
+    exit 130, leaves no process, and the output folder keeps the earlier build."""
+    import dataclasses
+
+    env = {"PRS_GEOM_STAGE_CACHE": "1", "PRS_GEOM_CACHE": str(tmp_path / "cache")}
+    design_file = tmp_path / "small.toml"
+    save_design(SMALL, design_file)
+    out = tmp_path / "out"
+    first, lines = _start(design_file, out, env)
+    assert first.wait(timeout=300) == 0, "\n".join(lines)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    design_file = tmp_path / "small-21kN.toml"
+    save_design(SMALL.with_changes(loading=dataclasses.replace(SMALL.loading, axial_load_n=21_000.0)), design_file)
+    proc, lines = _start(design_file, out, env)
+    try:
+        t0 = time.monotonic()
+        while not (side := [r for r in _group_alive(proc.pid) if "prs_geom.runtime.sidecar" in r]):
+            assert proc.poll() is None, "the rebuild ended before its plot process was seen:\n" + "\n".join(lines)
+            assert time.monotonic() - t0 < 60
+            time.sleep(0.02)
+        if target == "group":
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            os.kill(int(side[0].split()[2]), signal.SIGINT)
+        proc.wait(timeout=120)
+        time.sleep(0.2)   # let the reader thread take the last lines
+        assert proc.returncode == 130, "\n".join(lines)
+        assert [line for line in lines if not line.startswith("[")] == ["interrupted"], "\n".join(lines)
+        t0 = time.monotonic()
+        while _group_alive(proc.pid) and time.monotonic() - t0 < 30:
+            time.sleep(0.2)
+        assert _group_alive(proc.pid) == []
+        assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)

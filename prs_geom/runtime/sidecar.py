@@ -135,7 +135,7 @@ class Sidecar:
         return value
 
     def close(self) -> None:
-        """Stop the process (SIGKILL) and reap it. It holds nothing worth a clean exit: its
+        """Stop the process (SIGKILL) and reap it; again, nothing. It holds nothing worth a clean exit: its
         files are written and its results taken, or the build failed; an orderly interpreter
         shutdown with matplotlib loaded would add 0.15 s to every rebuild."""
         if self._proc.poll() is None:
