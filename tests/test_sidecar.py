@@ -31,6 +31,8 @@ def test_jobs_come_back_in_order_with_values_errors_and_times():
     error with its type and field, and a job that does not unpickle there, which fails alone."""
     sidecar = Sidecar()
     try:
+        slow = sidecar.submit(time.sleep, (0.5,), {})
+        assert not slow.done()
         square = sidecar.submit(operator.mul, (3.0, 3.0), {})
         stray = sidecar.submit(print, ("a stray line on standard output",), {})
         failing = sidecar.submit(positive, ("roller.count", -3.5), {})
@@ -38,6 +40,7 @@ def test_jobs_come_back_in_order_with_values_errors_and_times():
         last = sidecar.submit(os.getpid, (), {})
         value, seconds = last.result()      # waits past the jobs before it
         assert value == sidecar.pid != os.getpid() and seconds >= 0.0
+        assert slow.done() and slow.result()[1] >= 0.5
         assert square.done() and square.result()[0] == 9.0
         assert stray.result()[0] is None
         with pytest.raises(DesignError) as info:

@@ -40,20 +40,28 @@ _HEADER = 8
 
 def _send(stream: BinaryIO, obj: Any) -> None:
     data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
-    stream.write(len(data).to_bytes(_HEADER, "little") + data)
+    view = memoryview(len(data).to_bytes(_HEADER, "little") + data)
+    while view:     # an unbuffered pipe may take part of a large write
+        view = view[stream.write(view) or 0:]
     stream.flush()
 
 
+def _read_exact(stream: BinaryIO, size: int) -> bytes:
+    """``size`` bytes, or raise EOFError when the other side closed its end first (an
+    unbuffered pipe returns what it has)."""
+    chunks = []
+    while size:
+        chunk = stream.read(size)
+        if not chunk:
+            raise EOFError
+        chunks.append(chunk)
+        size -= len(chunk)
+    return b"".join(chunks)
+
+
 def _receive_bytes(stream: BinaryIO) -> bytes:
-    """The next message's pickle, or raise EOFError when the other side closed its end."""
-    head = stream.read(_HEADER)
-    if len(head) < _HEADER:
-        raise EOFError
-    size = int.from_bytes(head, "little")
-    data = stream.read(size)
-    if len(data) < size:
-        raise EOFError
-    return data
+    """The next message's pickle (EOFError: the other side closed its end)."""
+    return _read_exact(stream, int.from_bytes(_read_exact(stream, _HEADER), "little"))
 
 
 def _receive(stream: BinaryIO) -> Any:
@@ -93,7 +101,8 @@ class Sidecar:
         if warm is not None:
             argv.append(f"{warm.__module__}:{warm.__qualname__}")
         with _blocked():    # the child starts with SIGINT and SIGTERM blocked (pool._blocked)
-            self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+            # unbuffered: what select() sees on the pipe is all there is (finished())
+            self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0)
         self._sent = 0
         self._received: list[tuple[bool, Any]] = []
 
