@@ -196,12 +196,13 @@ DOCS_TESTS = {("test_architecture", "test_docs_build_strict")}
 #: suite sends the costliest files to the xdist workers first (--dist loadfile hands out
 #: files in collection order), so that no worker is left running a long file alone at the end.
 FILE_COST_S = {
-    "test_safety": 100, "test_fe_compliance": 75, "test_step": 60, "test_html": 60, "test_golden": 50,
-    "test_code_health": 40, "test_api_examples": 35, "test_api": 30, "test_mechanism": 27, "test_scene": 23,
-    "test_numeric_guards": 23, "test_mesh": 21, "test_studies": 21, "test_report_schema": 20,
-    "test_tolerance": 17, "test_exports": 17, "test_load_solver": 15, "test_cli": 15, "test_interference": 15,
-    "test_designio": 15, "test_background": 14, "test_injection": 13, "test_architecture": 13,
-    "test_machining": 12, "test_fuzz": 12, "test_interrupts": 12, "test_fe": 10,
+    "test_step": 260, "test_build_cache": 88, "test_safety": 79, "test_api": 58, "test_html": 56,
+    "test_golden": 56, "test_fe_compliance": 50, "test_code_health": 44, "test_interrupts": 36,
+    "test_numeric_guards": 35, "test_fuzz": 31, "test_report_schema": 29, "test_scene": 27, "test_cli": 22,
+    "test_api_examples": 22, "test_mesh": 21, "test_build_only": 20, "test_injection": 20,
+    "test_architecture": 19, "test_background": 19, "test_machining": 18, "test_tolerance": 17, "test_fe": 17,
+    "test_pipeline": 16, "test_designio": 14, "test_parts": 13, "test_exports": 11, "test_drawing": 10,
+    "test_studies": 10, "test_interference": 10, "test_interference_windows": 10,
 }
 
 
