@@ -897,7 +897,7 @@ class CachePlan:
 
     def take(self, stage: str, design: PRSDesign) -> "StageRecord | None":
         """The record of ``stage``: read now if it has not been, a hit only when sound."""
-        if stage in self.keys and stage not in self.hits and (stage in self.pending or stage not in self.looked):
+        if stage in self.keys and stage not in self.looked:
             self.pending.discard(stage)
             self.looked.add(stage)
             record, _ = self.cache.read(stage, *self.keys[stage], design)
@@ -1180,6 +1180,7 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
 
         require_ocp()   # a missing extra is known now, not after the meshing
     from prs_geom.runtime.cache import reads_disabled
+    from prs_geom.runtime.pool import default_workers
 
     stage_cache = _stage_cache()
     if stage_cache is None:
@@ -1187,35 +1188,21 @@ def _prepare(design: PRSDesign, stages: list[str], options: BuildOptions, memory
     sidecar = None
     with reads_disabled() if cache is False else contextlib.nullcontext():
         plan = CachePlan.keyed(stage_cache, design, stages, options)
-        if cache is not False and _plots_left(plan, design):
-            from prs_geom.exports.plots import warm_up
-            from prs_geom.runtime.sidecar import Sidecar
+        plan.defer()    # no record is stored while reads are disabled: every stage computes
+    restored = not plan.computes("meshes") and not _needs_workers(plan, design)
+    if restored and any(plan.computes(s) for s in PLOT_STAGES) and default_workers() > 0:
+        # only figures are left for workers: a plot process of its own pays, never with PRS_GEOM_WORKERS=0
+        from prs_geom.exports.plots import warm_up
+        from prs_geom.runtime.sidecar import Sidecar
 
-            sidecar = started if started is not None else Sidecar(warm_up)
-        plan.defer()
-    if not plan.computes("meshes") and not _needs_workers(plan, design):
+        sidecar = started if started is not None else Sidecar(warm_up)
+    if restored:
         return 0, plan, sidecar     # the meshes and the checks come from the cache: nothing to fit in memory
-    try:
-        return plan_build(design, memory_budget)[0], plan, sidecar
-    except BaseException:
-        if sidecar is not None:
-            sidecar.close()
-        raise
+    return plan_build(design, memory_budget)[0], plan, None
 
 
 #: The stages that draw figures (:meth:`BuildContext.add_plot`).
 PLOT_STAGES = ("loads", "rating", "tolerance")
-
-
-def _plots_left(plan: CachePlan, design: PRSDesign) -> bool:
-    """Whether the build, judged by the records its cache holds, will have figures to draw
-    and no work for a pool of workers: then a plot process of its own pays
-    (:mod:`prs_geom.runtime.sidecar`). Never when ``$PRS_GEOM_WORKERS`` is 0."""
-    from prs_geom.runtime.pool import default_workers
-
-    heavy = ("meshes", "checks", "manufacturing") + (("tolerance",) if design.tolerances is not None else ())
-    return default_workers() > 0 and all(plan.stored(s) for s in heavy if s in plan.keys) and \
-        any(s in plan.keys and not plan.stored(s) for s in PLOT_STAGES)
 
 
 def build(design: PRSDesign | HarmonicDesign, out_dir: str | Path, progress: ProgressFn = silent,
