@@ -158,6 +158,8 @@ SLOW_TESTS = {
     ("test_actuator_meshes", "test_default_assembly_places_the_actuator_parts"),
     ("test_architecture", "test_theoretical_diameter_is_solved_once_per_build"),
     ("test_architecture", "test_package_import_is_light"),
+    ("test_broad_phase", "test_broad_phase_and_slices"),
+    ("test_broad_phase", "test_theoretical_screw_check"),
     ("test_assembly", "test_end_gears_mesh_with_the_ring_gear"),
     ("test_cli", "test_failing_build_leaves_earlier_output_unchanged"),
     ("test_cli", "test_console_script_exit_code"),
@@ -202,7 +204,7 @@ FILE_COST_S = {
     "test_api_examples": 22, "test_mesh": 21, "test_build_only": 20, "test_injection": 20,
     "test_architecture": 19, "test_background": 19, "test_machining": 18, "test_tolerance": 17, "test_fe": 17,
     "test_pipeline": 16, "test_designio": 14, "test_parts": 13, "test_exports": 11, "test_drawing": 10,
-    "test_studies": 10, "test_interference": 10, "test_interference_windows": 10,
+    "test_studies": 10, "test_interference": 10, "test_interference_windows": 10, "test_broad_phase": 9,
 }
 
 
