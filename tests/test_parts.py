@@ -45,6 +45,29 @@ def test_every_complete_part_is_one_closed_shell_with_its_copies(asm):
         assert np.allclose(ref @ T[:3, :3].T + T[:3, 3], placed.vertices, atol=1e-9)
 
 
+@pytest.mark.parametrize("defect", ["none", "flipped face", "duplicate face", "missing face", "two boxes"])
+def test_edge_check_against_trimesh_on_closed_and_broken_meshes(defect):
+    """edge_check's closure against trimesh's independent is_watertight and
+    is_winding_consistent, on a closed box and on the box with each kind of defect."""
+    from prs_geom.mesh.parts import CompletePart
+
+    box = trimesh.creation.box()
+    V, F = np.asarray(box.vertices), np.asarray(box.faces)
+    if defect == "flipped face":
+        F = np.concatenate([F[:1, ::-1], F[1:]])
+    elif defect == "duplicate face":
+        F = np.concatenate([F, F[:1]])
+    elif defect == "missing face":
+        F = F[1:]
+    elif defect == "two boxes":
+        V, F = np.concatenate([V, V + 3.0]), np.concatenate([F, F + len(V)])
+    part = CompletePart("box", V, F, 1.0, ("box",), ("box",), np.eye(4)[None])
+    m = trimesh.Trimesh(V, F, process=False)
+    closed, shells = part.edge_check()
+    assert closed == (m.is_watertight and m.is_winding_consistent) == (defect in ("none", "two boxes"))
+    assert shells == (2 if defect == "two boxes" else 1)
+
+
 def test_a_complete_part_is_the_union_of_its_pieces(asm):
     """The union's volume against a second formulation: the sum of the pieces' volumes less
     every pairwise overlap (no three pieces share a region by the layout), plus the datum

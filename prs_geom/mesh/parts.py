@@ -85,12 +85,14 @@ class CompletePart:
         components of the triangle graph."""
         if self._edges is not None:
             return self._edges
-        F = self.faces
-        directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-        # each directed edge once, and its reverse exactly once
-        uniq, counts = np.unique(directed, axis=0, return_counts=True)
-        rev = np.unique(directed[:, ::-1], axis=0)
-        closed = bool(np.all(counts == 1) and len(uniq) == len(rev) and np.array_equal(uniq, rev))
+        F = np.asarray(self.faces, dtype=np.int64)
+        # every directed edge (a, b) once, and its reverse (b, a) exactly once: as one int64
+        # key a n + b, sorted, rather than np.unique over rows (60 times slower, measured:
+        # 0.79 s -> 0.012 s over the default design's complete parts)
+        n = max(len(self.vertices), 1)
+        a, b = F.ravel(), np.roll(F, -1, axis=1).ravel()
+        forward, backward = np.sort(a * n + b), np.sort(b * n + a)
+        closed = bool(np.all(forward[1:] != forward[:-1]) and np.array_equal(forward, backward))
         object.__setattr__(self, "_edges", (closed, _shells(len(self.vertices), F)))
         return self._edges
 
