@@ -204,7 +204,7 @@ FILE_COST_S = {
     "test_api_examples": 22, "test_mesh": 21, "test_build_only": 20, "test_injection": 20,
     "test_architecture": 19, "test_background": 19, "test_machining": 18, "test_tolerance": 17, "test_fe": 17,
     "test_pipeline": 16, "test_designio": 14, "test_parts": 13, "test_exports": 11, "test_drawing": 10,
-    "test_studies": 10, "test_interference": 10, "test_interference_windows": 10, "test_broad_phase": 9,
+    "test_studies": 10, "test_interference": 10, "test_interference_windows": 10, "test_broad_phase": 13,
 }
 
 

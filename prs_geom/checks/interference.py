@@ -157,9 +157,12 @@ def pair_overlaps(asm: Assembly, progress: ProgressFn = silent,
     pairs = body_pairs(list(asm.placed))
     keys = {pair: _pair_key(asm.placed[pair[0]], asm.placed[pair[1]]) for pair in pairs}
     # one pair per new memo key: a pair of the same meshes at the same placements is asked once
-    todo = [pair for pair in pairs if keys[pair] not in outcomes]
-    todo = [pair for i, pair in enumerate(todo) if keys[pair] not in {keys[p] for p in todo[:i]}] \
-        if len({keys[p] for p in todo}) < len(todo) else todo
+    todo: list[tuple[str, str]] = []
+    seen: set[_PairKey] = set()
+    for pair in pairs:
+        if keys[pair] not in outcomes and keys[pair] not in seen:
+            seen.add(keys[pair])
+            todo.append(pair)
     queries = _Queries(asm, cache)
     asked = [pair for pair in todo if queries.can_touch(*pair)]
     done = len(pairs) - len(asked)
@@ -204,9 +207,9 @@ SPLIT_FACES = 30_000
 
 def _by_body_pair(pairs: list[tuple[str, str]]) -> list[list[tuple[str, str]]]:
     """``pairs`` grouped by their two rigid bodies, groups in order of first appearance."""
-    groups: dict[tuple[str, str], list[tuple[str, str]]] = {}
+    groups: dict[tuple[str, ...], list[tuple[str, str]]] = {}
     for a, b in pairs:
-        groups.setdefault((Assembly.rigid_body(a), Assembly.rigid_body(b)), []).append((a, b))
+        groups.setdefault(tuple(sorted((Assembly.rigid_body(a), Assembly.rigid_body(b)))), []).append((a, b))
     return list(groups.values())
 
 
@@ -260,13 +263,14 @@ class _Queries:
             self.objects[name] = fcl.CollisionObject(self.bvhs[id(mesh)][1], fcl.Transform(T[:3, :3], T[:3, 3]))
         return self.objects[name]
 
-    def collision_object(self, name: str, other: str) -> fcl.CollisionObject:
-        """``name``'s collision object for a query against ``other``: a slice of a large mesh
-        (its faces near ``other``'s rigid body), else the whole mesh's BVH."""
+    def collision_object(self, name: str, other: str) -> tuple[fcl.CollisionObject, bool]:
+        """``name``'s collision object for a query against ``other`` and whether it is a
+        slice: of a large mesh, its faces near ``other``'s rigid body; else the whole mesh's
+        BVH."""
         mesh, T, _ = self.asm.placed[name]
         if len(mesh.faces) < SPLIT_FACES or self.placements[id(mesh)] > 1:
             # a mesh placed several times (the rollers) keeps one BVH for all its placements
-            return self._whole(name)
+            return self._whole(name), False
         body = Assembly.rigid_body(other)
         if (name, body) not in self.slices:
             parts = [self.placed_bounds(n) for n in self.asm.placed if Assembly.rigid_body(n) == body]
@@ -279,7 +283,7 @@ class _Queries:
             self.slices[(name, body)] = None if 2 * len(near) > len(faces) else fcl.CollisionObject(
                 _slice_bvh(np.asarray(mesh.vertices), faces[near]), fcl.Transform(T[:3, :3], T[:3, 3]))
         piece = self.slices[(name, body)]
-        return piece if piece is not None else self._whole(name)
+        return (piece, True) if piece is not None else (self._whole(name), False)
 
     def release(self, solids: bool = True, but: set[int] = frozenset()) -> None:  # type: ignore[assignment]
         """Free the BVHs (and ``solids``) of every mesh but those whose ids are in ``but``.
@@ -307,8 +311,9 @@ class _Queries:
         # the contact request straight away, not a boolean one first: on a pair that does not
         # collide both traverse the same BVH nodes and cost the same (measured), and the
         # contact count and the teeth must come from this request on the pairs that do
-        res = self._collide(self.collision_object(a, b), self.collision_object(b, a))
-        if res is not None and len(res.contacts) >= MAX_CONTACTS and len(self.slices):
+        (obj_a, sliced_a), (obj_b, sliced_b) = self.collision_object(a, b), self.collision_object(b, a)
+        res = self._collide(obj_a, obj_b)
+        if res is not None and len(res.contacts) >= MAX_CONTACTS and (sliced_a or sliced_b):
             # FCL stops at MAX_CONTACTS: which ones it gives depends on the BVH, so a
             # capped pair is asked again of the whole meshes, as a check without slices asks
             res = self._collide(self._whole(a), self._whole(b))
