@@ -863,18 +863,11 @@ class CachePlan:
 
     @classmethod
     def keyed(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
-        """The plan's keys, no record read yet (:meth:`read_records`)."""
+        """The plan's keys, no record read yet (each is read by :meth:`take`)."""
         from prs_geom.build_cache import stage_keys
         from prs_geom.runtime.stage_cache import source_fingerprint
 
         return cls(cache, stage_keys(design, stages, options, _build_date(), source_fingerprint()), {})
-
-    @classmethod
-    def read(cls, cache: "StageCache", design: PRSDesign, stages: list[str], options: BuildOptions) -> "CachePlan":
-        """The plan with the records the cache holds for its keys."""
-        plan = cls.keyed(cache, design, stages, options)
-        plan.read_records(design)
-        return plan
 
     def stored(self, stage: str) -> bool:
         """Whether the cache has a record under the key of ``stage`` (not yet read, so not
@@ -883,11 +876,6 @@ class CachePlan:
 
         return stage in self.keys and reads_enabled() and \
             self.cache.store.path(stage, self.keys[stage][0]).is_file()
-
-    def read_records(self, design: PRSDesign) -> None:
-        """Read the record of each stage now; the sound ones are the hits."""
-        for name in self.keys:
-            self.take(name, design)
 
     def defer(self) -> None:
         """Read each stored record only when its stage comes (:meth:`take`): until then the
@@ -987,11 +975,12 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     the drawings of ``manufacturing``, the plots of ``loads``, ``rating``, ``tolerance``),
     wherever they ran. With workers their sum exceeds the build's wall time.
 
-    ``plan`` (a planetary roller screw design only; :meth:`CachePlan.read` for ``stages``): a
+    ``plan`` (a planetary roller screw design only; :meth:`CachePlan.keyed` for ``stages``): a
     stage whose key (:mod:`prs_geom.build_cache`) the cache holds is restored from its
     record instead of run (``ctx.hits``), and every stage that ran stores its record at the
     end. ``sidecar``: the plot process that :func:`_prepare` started for a rebuild; it draws
-    the figures, and is let go (or killed, when the stages fail) here.
+    the figures and is closed (killed and reaped) here when the stages end, whether they
+    succeed or fail.
     """
     from prs_geom.runtime.pool import Background
 

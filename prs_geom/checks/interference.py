@@ -239,9 +239,7 @@ class _Queries:
         self.slices: dict[tuple[str, str], fcl.CollisionObject | None] = {}
         # the face boxes of the one large mesh being sliced
         self.boxes: dict[str, tuple[NDArray, NDArray]] = {}
-        self.placements: dict[int, int] = {}
-        for mesh, _, _ in asm.placed.values():
-            self.placements[id(mesh)] = self.placements.get(id(mesh), 0) + 1
+        self.placements = Counter(id(mesh) for mesh, _, _ in asm.placed.values())
 
     def placed_bounds(self, name: str) -> PlacedBounds:
         mesh, T, _ = self.asm.placed[name]
@@ -285,13 +283,13 @@ class _Queries:
         piece = self.slices[(name, body)]
         return (piece, True) if piece is not None else (self._whole(name), False)
 
-    def release(self, solids: bool = True, but: set[int] = frozenset()) -> None:  # type: ignore[assignment]
-        """Free the BVHs (and ``solids``) of every mesh but those whose ids are in ``but``.
-        The bounds stay: they keep every mesh of a memo key alive, so that its id is never
-        another mesh's."""
+    def release(self, but: set[int]) -> None:
+        """Free the BVHs and the solids of every mesh but those whose ids are in ``but``
+        (the screw's among them: the next check meshes another screw). The bounds stay:
+        they keep every mesh of a memo key alive, so that its id is never another mesh's."""
         self.objects.clear()
         self.slices.clear()
-        for store in (self.bvhs, self.solids) if solids else (self.bvhs,):
+        for store in (self.bvhs, self.solids):
             for key in [k for k in store if k not in but]:
                 del store[key]
 
@@ -341,17 +339,6 @@ class _Queries:
         z = z[(z >= slab[0]) & (z < slab[1])]
         volume, area = _trimmed(inter, slab) if not inter.is_empty() else (0.0, 0.0)
         return _Overlap(z, volume, area) if len(z) or volume > 0.0 else None
-
-
-def _forget(cache: dict[str, dict[Any, Any]], mesh: trimesh.Trimesh) -> None:
-    """Drop the BVH and the solid of ``mesh`` from a :func:`check_assembly` cache: a screw's,
-    once its pairs are done, since the next check (the other screw) shares every mesh but
-    that one. FCL's BVH takes about 490 MB per million triangles; the default design's screw,
-    0.35 M triangles at the check tolerance, would otherwise stay beside the next screw's
-    (measured on the default design: the checks' peak 537 -> 467 MB). Its pair outcomes stay: they are small and
-    keyed by the mesh, which the caller still holds."""
-    cache.get("bvh", {}).pop(id(mesh), None)
-    cache.get("solid", {}).pop(id(mesh), None)
 
 
 def _section(design: PRSDesign, overlaps: dict[tuple[str, str], _Overlap | None], tol: float,
@@ -456,7 +443,6 @@ def interference_checks(design: PRSDesign, screw_profile: ThreadProfile,
         return windowed_interference_checks(design, screw_profile, progress)
     cache: dict[str, dict[Any, Any]] = {}
     corrected, asm = _interference(design, "corrected", None, progress, screw_profile, cache=cache, keep="screw")
-    _forget(cache, asm.placed["screw"][0])
     nominal, _ = _interference(design, "nominal", None, progress, None, reuse=asm, cache=cache, keep="none")
     corrected["nominal_screw"] = nominal
     return corrected
@@ -514,7 +500,6 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
             keep = "none" if j == len(screws) - 1 else "screw"
             for pair, hit in pair_overlaps(piece, silent, cache, (lo, hi), keep).items():
                 totals[screw][pair] = _merge(totals[screw].get(pair), hit)
-            _forget(cache, piece.placed["screw"][0])
             seconds[screw] += time.perf_counter() - t0
         del first, piece, cache
         progress("interference windows", i + 1, len(windows))
