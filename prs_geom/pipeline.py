@@ -18,6 +18,7 @@ so on, see README "Python API").
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import shutil
 import time
@@ -606,15 +607,22 @@ def stage_meshes(ctx: BuildContext) -> None:
     from prs_geom.exports.html import scene_payload
     from prs_geom.exports.meshes import export_meshes
     from prs_geom.mesh.assembly import build_assembly, build_part
+    from prs_geom.runtime.memwatch import release_free_heap
 
     d = ctx.design
     # the screw of every export is the theoretical one (the state the analysis certifies)
     asm = build_assembly(d, progress=ctx.progress, screw_profile=ctx.results.contact.screw_profile)
     ctx.results.meshes = MeshStage(asm)
     start_mesh_checks(ctx)
+    # the heap is trimmed after each step that frees large temporaries (release_free_heap):
+    # this stage runs while the checks worker holds its BVHs, the build's peak
+    release_free_heap()
     if ctx.runs("html"):
         # report.html's 3D view, at the display tolerance: with the meshes, whose inputs it has
         ctx.results.meshes = MeshStage(asm, scene_payload(d, screw_profile=ctx.results.contact.screw_profile))
+        release_free_heap()
+    asm.complete_parts()        # manifold3d unions: 0.1 GB of temporaries on the default design
+    release_free_heap()
     nominal = build_part(d, "screw") if ctx.options.nominal_screw else None
     for name in export_meshes(asm, ctx.out, design_hash(d), nominal):
         ctx.results.files.append(name)
@@ -962,6 +970,13 @@ def _stage_label(ctx: BuildContext, name: str) -> str:
     return f"{name} (reused from the cache)" if name in ctx.hits else name
 
 
+def warm_worker() -> None:
+    """The warm-up of the build's worker processes (:class:`~prs_geom.runtime.sidecar.SidecarPool`):
+    nothing, because naming it imports this module, and with it what every job needs (numpy,
+    scipy, the model and the analysis). What only one job needs (FCL, ezdxf, matplotlib) is
+    imported by the process that takes that job."""
+
+
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None,
@@ -982,15 +997,23 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     the figures and is closed (killed and reaped) here when the stages end, whether they
     succeed or fail.
     """
+    from prs_geom.runtime.memwatch import release_free_heap
     from prs_geom.runtime.pool import Background
+    from prs_geom.runtime.sidecar import SidecarPool
 
     stages = STAGES if stages is None else stages
     ctx = BuildContext(design=design, out=out, progress=progress, options=options or BuildOptions(),
                        stages=list(stages), plan=plan)
     if plan is not None and not _needs_workers(plan, design):
         workers = 0     # what is left (a few plots) is done before worker processes would start
-    with Background(workers, sidecar=sidecar) as background:
+    # processes of the build's own (no resource trackers, no joblib), unless a tolerance study
+    # runs in the build: it shares loky's pool with the build's jobs (stage_tolerance)
+    own = not (ctx.computes("tolerance") and getattr(design, "tolerances", None) is not None)
+    processes = functools.partial(SidecarPool, warm=warm_worker) if own else None
+    with Background(workers, sidecar=sidecar, processes=processes) as background:
         ctx.background = background
+        if ctx.computes("checks") or ctx.computes("manufacturing"):
+            background.start()      # the workers import while the first stages run
         added = {}
         for name, fn in stages:
             ctx.current_stage = name
@@ -1007,6 +1030,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
                 mark = _StageMark.of(ctx)
                 fn(ctx)
                 added[name] = mark.added(ctx)
+                release_free_heap()
             ctx.finished.append(name)
             ctx.results.timings_s[name] = time.perf_counter() - t0
             end_stage(progress, _stage_label(ctx, name))

@@ -27,6 +27,12 @@ SMALL = PRSDesign(name="small", thread=Thread(engaged_teeth=6), roller=Roller(co
                   mesh=MeshSettings(chord_tolerance_mm=0.02), actuator=ActuatorSettings(enabled=False))
 
 
+#: How ``ps`` shows a build's worker process (:class:`prs_geom.runtime.sidecar.SidecarPool`)
+#: and a study's (loky).
+BUILD_WORKER = "prs_geom.runtime.sidecar"
+STUDY_WORKER = "popen_loky"
+
+
 def _group_alive(pgid: int) -> list[str]:
     """Processes of process group ``pgid`` that are not zombies (a killed child whose
     parent has gone waits for init to reap it: it runs nothing and holds no memory)."""
@@ -81,7 +87,7 @@ def test_interrupt_stops_every_process_and_prints_one_line(tmp_path, target, sig
         elif target == "group":
             os.killpg(proc.pid, sig)
         else:   # one worker only: it hands the signal to the main process
-            workers = [r.split()[2] for r in _group_alive(proc.pid) if "popen_loky" in r]
+            workers = [r.split()[2] for r in _group_alive(proc.pid) if BUILD_WORKER in r]
             assert workers, _group_alive(proc.pid)
             os.kill(int(workers[0]), sig)
         proc.wait(timeout=120)
@@ -90,7 +96,7 @@ def test_interrupt_stops_every_process_and_prints_one_line(tmp_path, target, sig
         t0 = time.monotonic()
         while _group_alive(proc.pid) and time.monotonic() - t0 < 0.25:
             time.sleep(0.02)
-        assert not any("popen_loky" in r for r in _group_alive(proc.pid)), _group_alive(proc.pid)
+        assert not any(BUILD_WORKER in r for r in _group_alive(proc.pid)), _group_alive(proc.pid)
         time.sleep(0.2)   # let the reader thread take the last lines
         assert proc.returncode == code, "\n".join(lines)
         after = [line for line in lines[before:] if not line.startswith("[")]   # progress lines start with [
@@ -131,7 +137,7 @@ def test_ctrl_c_in_a_plain_script_using_the_api_cleans_up(tmp_path):
     try:
         # the interference check reports from its worker: wait until a worker is at work
         t0 = time.monotonic()
-        while not any("popen_loky" in r for r in _group_alive(proc.pid)):
+        while not any(BUILD_WORKER in r for r in _group_alive(proc.pid)):
             assert proc.poll() is None, proc.communicate()
             assert time.monotonic() - t0 < 120
             time.sleep(0.05)
@@ -170,8 +176,8 @@ def test_sigkill_of_the_main_process_leaves_no_worker_running_or_writing(tmp_pat
         if command == "build" else \
         [str(exe), "tolerance", str(design_file), "--flank-um", "1", "--samples", "200000",
          *(["--dask-workers", "2"] if command == "tolerance-dask" else ["--workers", "2"])]
-    # loky workers, or the processes of a local Dask cluster (multiprocessing spawn)
-    worker_mark = "spawn_main" if command == "tolerance-dask" else "popen_loky"
+    # the build's workers, loky's, or the processes of a local Dask cluster (multiprocessing spawn)
+    worker_mark = {"build": BUILD_WORKER, "tolerance": STUDY_WORKER, "tolerance-dask": "spawn_main"}[command]
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
                             preexec_fn=os.setsid, cwd=tmp_path)
     try:
@@ -215,7 +221,7 @@ def test_ctrl_c_to_a_study_prints_one_line(tmp_path, where):
                             preexec_fn=child_setup, cwd=tmp_path)
     # loky: two workers; Dask: two nannies and their two workers, and a Ctrl-C while the
     # cluster starts is lost by design (scaleout, background.signals_ignored): wait for all
-    mark = "spawn_main" if where[0] == "--dask-workers" else "popen_loky"
+    mark = "spawn_main" if where[0] == "--dask-workers" else STUDY_WORKER
     need = 4 if where[0] == "--dask-workers" else 2
     try:
         t0 = time.monotonic()

@@ -289,9 +289,8 @@ def test_a_scene_write_that_fails_midway_leaves_no_file(tmp_path, monkeypatch):
     writing part of the file leaves neither the target nor a temporary file."""
     import prs_geom.exports.scene as scene_module
 
-    def half_then_fail(self, data, *args, **kwargs):
-        with open(self, "wb") as fh:
-            fh.write(data[:12])
+    def half_then_fail(scene, sharp_deg):     # the header written, then the disk is full
+        yield b"glTF" + bytes(8)
         raise OSError("disk full")
 
     def model_half_then_fail(model, path):
@@ -300,7 +299,7 @@ def test_a_scene_write_that_fails_midway_leaves_no_file(tmp_path, monkeypatch):
 
     scene = _box_scene()
     with monkeypatch.context() as m:
-        m.setattr(Path, "write_bytes", half_then_fail)
+        m.setattr(scene_module, "_glb_file", half_then_fail)
         with pytest.raises(OSError, match="disk full"):
             scene_module.write_glb(scene, tmp_path / "assembly.glb")
     assert list(tmp_path.iterdir()) == []

