@@ -18,7 +18,6 @@ so on, see README "Python API").
 from __future__ import annotations
 
 import contextlib
-import functools
 import json
 import shutil
 import time
@@ -970,13 +969,6 @@ def _stage_label(ctx: BuildContext, name: str) -> str:
     return f"{name} (reused from the cache)" if name in ctx.hits else name
 
 
-def warm_worker() -> None:
-    """The warm-up of the build's worker processes (:class:`~prs_geom.runtime.sidecar.SidecarPool`):
-    nothing, because naming it imports this module, and with it what every job needs (numpy,
-    scipy, the model and the analysis). What only one job needs (FCL, ezdxf, matplotlib) is
-    imported by the process that takes that job."""
-
-
 def run_stages(design, out: Path, progress: ProgressFn = silent,
                stages: list[tuple[str, Callable[[BuildContext], None]]] | None = None,
                options: BuildOptions | None = None, workers: int | None = None,
@@ -999,7 +991,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     """
     from prs_geom.runtime.memwatch import release_free_heap
     from prs_geom.runtime.pool import Background
-    from prs_geom.runtime.sidecar import SidecarPool
+    from prs_geom.runtime.sidecar import shared_pool
 
     stages = STAGES if stages is None else stages
     ctx = BuildContext(design=design, out=out, progress=progress, options=options or BuildOptions(),
@@ -1009,11 +1001,8 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     # processes of the build's own (no resource trackers, no joblib), unless a tolerance study
     # runs in the build: it shares loky's pool with the build's jobs (stage_tolerance)
     own = not (ctx.computes("tolerance") and getattr(design, "tolerances", None) is not None)
-    processes = functools.partial(SidecarPool, warm=warm_worker) if own else None
-    with Background(workers, sidecar=sidecar, processes=processes) as background:
+    with Background(workers, sidecar=sidecar, processes=shared_pool if own else None) as background:
         ctx.background = background
-        if ctx.computes("checks") or ctx.computes("manufacturing"):
-            background.start()      # the workers import while the first stages run
         added = {}
         for name, fn in stages:
             ctx.current_stage = name

@@ -21,7 +21,7 @@ from prs_geom.model.errors import DesignError
 from prs_geom.model.validation import positive
 from prs_geom.runtime.memwatch import _children
 from prs_geom.runtime.pool import Background
-from prs_geom.runtime.sidecar import Sidecar, SidecarPool
+from prs_geom.runtime.sidecar import Sidecar, SidecarPool, shared_pool
 
 
 def _local() -> None:    # pragma: no cover - never runs: the plot process cannot import this module
@@ -166,3 +166,37 @@ def test_a_build_pool_starts_its_processes_and_nothing_else():
         assert set(_children(os.getpid())) - before == started
     assert all(p._proc.returncode is not None for p in pool.processes)
     assert not set(_children(os.getpid())) - before
+
+
+def test_the_shared_pool_serves_build_after_build_until_one_fails():
+    """The build's pool (shared_pool) outlives a build that ends normally: the next one gets
+    the same processes, imports done; a build that fails kills them, and the next gets new
+    ones."""
+    with Background(2, processes=shared_pool) as bg:
+        first = {bg.submit(os.getpid).result() for _ in range(4)}
+        pool = bg._pool
+    assert pool.usable and all(p._proc.poll() is None for p in pool.processes)
+    with Background(2, processes=shared_pool) as bg:
+        assert bg.submit(os.getpid).result() in first and bg._pool is pool
+    with pytest.raises(KeyError):
+        with Background(2, processes=shared_pool) as bg:
+            bg.submit(os.getpid).result()
+            raise KeyError("a stage failed")
+    assert not pool.usable and all(p._proc.returncode is not None for p in pool.processes)
+    with Background(2, processes=shared_pool) as bg:
+        assert bg.submit(os.getpid).result() not in first
+        bg._pool.close()
+
+
+def test_an_idle_pool_closes_itself_and_the_next_job_gets_a_new_one():
+    """A reusable pool with no job for idle_s seconds kills and reaps its processes; a
+    Background that still holds it starts a new pool for its next job."""
+    with Background(1, processes=lambda n: SidecarPool(n, idle_s=0.3)) as bg:
+        first = bg.submit(os.getpid).result()
+        pool = bg._pool
+        deadline = time.monotonic() + 10.0
+        while pool.processes[0]._proc.returncode is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not pool.usable and pool.processes[0]._proc.returncode is not None
+        assert bg.submit(os.getpid).result() != first
+        bg._pool.close()

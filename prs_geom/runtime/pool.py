@@ -53,7 +53,7 @@ from typing import Any, Callable
 
 from prs_geom.model.io import write_file_atomic
 
-__all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "worker_init",
+__all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "PoolClosed", "worker_init",
            "signals_ignored"]
 
 #: Environment variable: number of worker processes of a build (0 = serial).
@@ -62,6 +62,11 @@ WORKERS_ENV = "PRS_GEOM_WORKERS"
 PARENT_WATCH_S = 0.5
 #: Seconds an idle worker of the pool waits for more work before it exits.
 IDLE_S = 30
+
+
+class PoolClosed(RuntimeError):
+    """A job was given to a pool of :class:`Background` ``processes`` that is closed (a
+    :class:`~prs_geom.runtime.sidecar.SidecarPool` idle too long closes itself)."""
 
 
 def default_workers() -> int:
@@ -234,13 +239,14 @@ class Job:
 
 class Background:
     """A pool of ``workers`` processes (none: each job runs when its result is taken): loky's
-    shared pool, or one of its own that ``processes(workers)`` makes (the build's:
-    :class:`~prs_geom.runtime.sidecar.SidecarPool`; anything with ``submit(fn, args,
-    kwargs)`` giving futures of ``(value, seconds)``, and ``close()``).
+    shared pool, or the one that ``processes(workers)`` gives (the build's:
+    :func:`~prs_geom.runtime.sidecar.shared_pool`; anything with ``submit(fn, args, kwargs)``
+    giving futures of ``(value, seconds)`` or raising :class:`PoolClosed`, ``usable``,
+    ``reusable`` and ``close()``).
 
-    Use as a context manager: leaving it normally leaves loky's (shared, reusable) workers
-    idle and kills processes of its own (they hold nothing once their results are taken);
-    leaving it with an exception (an error, Ctrl-C, SIGTERM) kills the workers at once. Take
+    Use as a context manager: leaving it normally leaves reusable workers (loky's, the
+    build's shared pool) idle for the next user and closes others; leaving it with an
+    exception (an error, Ctrl-C, SIGTERM) kills the workers at once. Take
     every job's result before leaving normally. Job functions and their arguments must be picklable (module-level
     functions, frozen dataclasses, numpy arrays).
     """
@@ -291,7 +297,12 @@ class Background:
             kwargs = {**kwargs, "progress": FileProgress(progress_file)}
         if self.processes is not None:
             self.start()
-            return Job(self._pool.submit(fn, args, kwargs), progress_file=progress_file)
+            try:
+                future = self._pool.submit(fn, args, kwargs)
+            except PoolClosed:      # idle too long since the last job: a new pool
+                self._pool = self.processes(self.workers)
+                future = self._pool.submit(fn, args, kwargs)
+            return Job(future, progress_file=progress_file)
         # the pool starts its workers (and its manager thread, which starts any later ones)
         # on submit: with the signals blocked, so that the children start with them blocked.
         # The resource trackers first: the standard library's unblocks both signals after
@@ -307,7 +318,7 @@ class Background:
         """Start a pool of its own (:attr:`processes`) now, so that its processes import
         their warm-up while the caller works on; nothing when there is none, no worker, or
         it runs."""
-        if self.processes is not None and self.workers > 0 and self._pool is None:
+        if self.processes is not None and self.workers > 0 and (self._pool is None or not self._pool.usable):
             self._pool = self.processes(self.workers)
 
     def close(self, kill: bool = False) -> None:
@@ -323,7 +334,8 @@ class Background:
             if sidecar is not None:
                 sidecar.close()
             if pool is not None and self.processes is not None:
-                pool.close()
+                if kill or not pool.reusable:
+                    pool.close()
             elif pool is not None and kill:
                 _kill_pool(pool)
             if self._progress_dir is not None:

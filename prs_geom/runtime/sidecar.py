@@ -4,13 +4,16 @@ and the worker processes of a build (:class:`SidecarPool`).
 **The build's pool.** A cold build hands its checks, drawings, mesh checks and plots to two
 worker processes (:mod:`.pool`). Each is a :class:`Sidecar`; a thread of the main process
 sends the next queued job to whichever process is idle and reads the results as they come,
-so the jobs spread over the processes as in a pool (measured on the default build, six
-alternating runs each: peak memory of the process tree 545-562 MB, against 583-602 MB on
-loky's pool). It costs two interpreters and nothing else: loky's pool, which the studies keep (their rounds reuse warm workers), also starts
-two resource trackers, one of which imports joblib and numpy (32 MB between them at the
-default build's peak), and imports joblib in each worker (6 MB each). The processes start
-with the build (:class:`~prs_geom.runtime.pool.Background` ``processes``), import what the
-jobs need while the main process runs the first stages, and are killed when the build ends.
+so the jobs spread over the processes as in a pool. It costs two interpreters and nothing
+else. loky's pool, which the studies keep (their rounds reuse warm workers), also starts two
+resource trackers, one of which imports joblib and numpy (32 MB between them at the default
+build's peak), and imports joblib in each worker (6 MB each): measured on the default build,
+six alternating runs each, the process tree peaks at 545-562 MB on this pool and 583-602 MB
+on loky's. The processes start at the build's first job and, like loky's, stay for the
+next build of the same interpreter (a script, a notebook, a test session), which finds their
+imports done (:func:`shared_pool`, :class:`~prs_geom.runtime.pool.Background`
+``processes``); they go after :data:`SHARED_IDLE_S` s without a job, when a build fails or
+is interrupted (killed), and when the interpreter exits.
 
 **The plot process of a rebuild**: one worker, started before the stage records are read.
 
@@ -49,7 +52,7 @@ import threading
 from collections import deque
 from typing import Any, BinaryIO, Callable
 
-__all__ = ["Sidecar", "SidecarPool", "main"]
+__all__ = ["Sidecar", "SidecarPool", "shared_pool", "main"]
 
 #: Bytes of the length prefix of each message.
 _HEADER = 8
@@ -222,11 +225,13 @@ class SidecarPool:
     workers : int
         Number of processes (at least 1).
     warm : callable or None
-        Run by each process before it takes jobs (:class:`Sidecar`): the imports the jobs
-        need, done while the caller prepares them.
+        Run by each process before it takes jobs (:class:`Sidecar`).
+    idle_s : float or None
+        The pool closes itself after this many seconds without a job (the processes of
+        :func:`shared_pool`, which later builds reuse); None: only :meth:`close` closes it.
     """
 
-    def __init__(self, workers: int, warm: Callable[[], None] | None = None) -> None:
+    def __init__(self, workers: int, warm: Callable[[], None] | None = None, idle_s: float | None = None) -> None:
         if workers < 1:
             raise ValueError(f"workers = {workers}: a pool needs at least one process")
         self.changed = threading.Condition()
@@ -234,17 +239,31 @@ class SidecarPool:
         self._running: dict[Sidecar, _PoolJob] = {}
         self._failure: RuntimeError | None = None
         self._closed = False
+        self._closing = False
+        self._idle_s = idle_s
+        #: whether the pool outlives the caller's use of it (:func:`shared_pool`)
+        self.reusable = idle_s is not None
         self._wake_r, self._wake_w = os.pipe()
         self.processes = [Sidecar(warm) for _ in range(workers)]
+        self.workers = workers
         self._thread = threading.Thread(target=self._serve, name="prs-geom-pool", daemon=True)
         self._thread.start()
 
+    @property
+    def usable(self) -> bool:
+        """Whether the pool takes jobs that can succeed: open and no process lost."""
+        with self.changed:
+            return not self._closed and self._failure is None
+
     def submit(self, fn: Callable[..., Any], args: tuple, kwargs: dict) -> _PoolJob:
-        """Queue ``fn(*args, **kwargs)``."""
+        """Queue ``fn(*args, **kwargs)``. Raises :class:`~prs_geom.runtime.pool.PoolClosed`
+        when the pool is closed."""
         job = _PoolJob(self, pickle.dumps((fn, args, kwargs), protocol=pickle.HIGHEST_PROTOCOL))
         with self.changed:
             if self._closed:
-                raise RuntimeError("the worker processes of the build are closed")
+                from prs_geom.runtime.pool import PoolClosed
+
+                raise PoolClosed("the worker processes of the build are closed")
             if self._failure is not None:
                 self._finish(job, (False, self._failure))
                 return job
@@ -275,6 +294,7 @@ class SidecarPool:
             with self.changed:
                 if self._closed:
                     return
+                idle = not self._queue and not self._running
                 for sidecar in self.processes:
                     if self._queue and sidecar not in self._running:
                         self._running[sidecar] = self._queue.popleft()
@@ -287,7 +307,13 @@ class SidecarPool:
                     pass
                 job.request = b""   # the pickle (a mesh check's parts: tens of MB) is the process's now
             del sends
-            ready, _, _ = select.select([self._wake_r, *busy], [], [])
+            ready, _, _ = select.select([self._wake_r, *busy], [], [], self._idle_s if idle else None)
+            if not ready:
+                with self.changed:      # nothing came in idle_s seconds: close, unless a job just did
+                    if self._queue or self._running:
+                        continue
+                self.close()
+                return
             for stream in ready:
                 if stream == self._wake_r:
                     os.read(self._wake_r, 4096)
@@ -311,13 +337,17 @@ class SidecarPool:
                     self._finish(self._running.pop(sidecar), reply)
 
     def close(self) -> None:
-        """Kill the processes and reap them; stop the reader. Jobs not finished fail."""
+        """Kill the processes and reap them; stop the reader. Jobs not finished fail.
+        Again: nothing."""
         with self.changed:
-            self._closed = True
+            if self._closing:
+                return
+            self._closed = self._closing = True
         for sidecar in self.processes:
             sidecar.kill()
         os.write(self._wake_w, b"\0")
-        self._thread.join(5.0)
+        if self._thread is not threading.current_thread():
+            self._thread.join(5.0)
         with self.changed:
             failure = RuntimeError("the worker processes of the build were closed before the job was done")
             for job in [*self._running.values(), *self._queue]:
@@ -329,6 +359,45 @@ class SidecarPool:
             sidecar.close()
         for fd in (self._wake_r, self._wake_w):
             os.close(fd)
+
+
+#: Seconds the processes of :func:`shared_pool` wait idle for the next build before they go.
+SHARED_IDLE_S = 30.0
+_shared: SidecarPool | None = None
+_shared_lock = threading.Lock()
+
+
+def shared_pool(workers: int, warm: Callable[[], None] | None = None) -> SidecarPool:
+    """The process's pool of ``workers`` build workers, reused from build to build as loky
+    reuses its workers: a script, a notebook or a test session that builds again finds them
+    with their imports done. A new pool when there is none, it has another size, it lost a
+    process or closed (killed after a failed build, or idle for :data:`SHARED_IDLE_S` s). It
+    is closed when the interpreter exits."""
+    global _shared
+    with _shared_lock:
+        if _shared is not None and (_shared.workers != workers or not _shared.usable):
+            _shared.close()
+            _shared = None
+        if _shared is None:
+            if not _exit_hooked:
+                _hook_exit()
+            _shared = SidecarPool(workers, warm, SHARED_IDLE_S)
+        return _shared
+
+
+_exit_hooked = False
+
+
+def _hook_exit() -> None:
+    global _exit_hooked
+    import atexit
+
+    def close_shared() -> None:
+        if _shared is not None:
+            _shared.close()
+
+    atexit.register(close_shared)
+    _exit_hooked = True
 
 
 # --------------------------------------------------------------------------- in the process
