@@ -187,7 +187,6 @@ SLOW_TESTS = {
     ("test_scaleout", "test_joblib_equals_serial"),
     ("test_tolerance", "test_build_of_toleranced_design"),
     ("test_tolerance", "test_synthesis_meets_target_in_independent_rerun"),
-    ("test_code_health", "test_no_duplicate_code"),
 }
 #: The documentation tests: pages rendered, the site built, docstring examples run.
 DOCS_FILES = {"test_docs", "test_api_examples"}
@@ -199,7 +198,7 @@ DOCS_TESTS = {("test_architecture", "test_docs_build_strict")}
 #: files in collection order), so that no worker is left running a long file alone at the end.
 FILE_COST_S = {
     "test_step": 185, "test_build_cache": 88, "test_safety": 79, "test_api": 58, "test_html": 56,
-    "test_golden": 56, "test_fe_compliance": 50, "test_code_health": 44, "test_interrupts": 36,
+    "test_golden": 56, "test_fe_compliance": 50, "test_interrupts": 36,
     "test_numeric_guards": 35, "test_fuzz": 31, "test_report_schema": 29, "test_scene": 27, "test_cli": 22,
     "test_api_examples": 22, "test_mesh": 21, "test_build_only": 20, "test_injection": 20,
     "test_architecture": 19, "test_background": 19, "test_machining": 18, "test_tolerance": 17, "test_fe": 17,

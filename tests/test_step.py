@@ -364,13 +364,15 @@ def test_build_with_step_writes_one_valid_named_solid_per_part(ocp, tmp_path):
     """``prs-geom build --step``: screw.step (theoretical), roller.step and nut.step, each one
     valid named solid, and the report's step section says so; read back with OCP."""
     from prs_geom.exports.step import read_step
+    from prs_geom.model.actuator import ActuatorSettings
     from prs_geom.model.design import GearSettings, MeshSettings, PRSDesign, Thread
     from prs_geom.pipeline import BuildOptions, build
 
     # without end gears: the roller and the nut stay thread bodies (their complete solids,
-    # 100 s of OpenCascade, are built by the graded example's test)
+    # 100 s of OpenCascade, are built by the graded example's test); a 20 mm stroke, not the
+    # default 100 mm: the complete screw's solid took 14 s instead of 19 s
     d = PRSDesign(name="steptest", thread=Thread(engaged_teeth=6), gears=GearSettings(enabled=False),
-                  mesh=MeshSettings(chord_tolerance_mm=0.02))
+                  mesh=MeshSettings(chord_tolerance_mm=0.02), actuator=ActuatorSettings(stroke_mm=20.0))
     report = build(d, tmp_path / "out", options=BuildOptions(step=True))
     assert report["step"]["files"] == ["screw.step", "roller.step", "nut.step", "carrier.step",
                                        "retaining_ring.step"]
