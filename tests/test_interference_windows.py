@@ -151,3 +151,25 @@ def test_long_design_builds_without_workers(tmp_path, monkeypatch):
         with pytest.raises(Stop):
             pipeline.build(d, tmp_path / f"w{window}", memory_budget=2 ** 40)
     assert seen == [2, 0]
+
+
+def test_progress_counts_pairs_in_one_window_and_windows_in_several(design, monkeypatch):
+    """An actuator's check is one window (its nut span): the progress counts its pairs, up
+    to all of them, once per screw. Several windows: it counts the windows only (a pair
+    count would start again at 0 in each)."""
+    monkeypatch.setattr(itf, "CHECK_TOLERANCE_MM", TOL)
+    actuator = default_design()
+    assert budget.check_windows(actuator) is None and budget.check_span(actuator) is not None
+    calls: list[tuple[str, int, int]] = []
+    itf.interference_checks(actuator, theoretical_screw(actuator).profile,
+                            progress=lambda stage, done, total: calls.append((stage, done, total)))
+    pairs = [c for c in calls if c[0] == "interference pairs"]
+    finished = [c for c in pairs if c[1] == c[2]]
+    assert len(finished) == 2 and finished[0][2] > 1000               # both screws, every pair
+    assert all(0 <= done <= total for _, done, total in pairs)
+    assert calls[-1] == ("interference windows", 1, 1)
+    calls.clear()
+    monkeypatch.setattr(budget, "CHECK_WINDOW_TEETH", 8)
+    itf.interference_checks(design, theoretical_screw(design).profile,
+                            progress=lambda stage, done, total: calls.append((stage, done, total)))
+    assert calls == [("interference windows", k, 3) for k in (1, 2, 3)]

@@ -484,6 +484,9 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
     mech_parts = mechanism_parts(design, tol)
     totals: dict[str, dict[tuple[str, str], _Overlap | None]] = {screw: {} for screw in screws}
     seconds = {screw: 0.0 for screw in screws}
+    # one window (an actuator's nut span, the default design): its pairs are the progress;
+    # with several, the windows are (a pair count per window would run back to 0 each time)
+    pair_progress = progress if len(windows) == 1 else silent
     for i, (lo, hi) in enumerate(windows):
         cache: dict[str, dict[Any, Any]] = {}
         widened = (max(lo - margin, span[0]), min(hi + margin, span[1]))
@@ -493,7 +496,7 @@ def _windowed(design: PRSDesign, screw_profile: ThreadProfile | None, progress: 
             prof = screw_profile if screw == "corrected" else None
             piece = window_assembly(design, tol, widened, prof, gear_parts, reuse=first, mech_parts=mech_parts)
             first = first or piece
-            for pair, hit in pair_overlaps(piece, silent, cache, (lo, hi), "none").items():
+            for pair, hit in pair_overlaps(piece, pair_progress, cache, (lo, hi), "none").items():
                 totals[screw][pair] = _merge(totals[screw].get(pair), hit)
             seconds[screw] += time.perf_counter() - t0
         del first, piece, cache
