@@ -10,8 +10,8 @@ study and the design sweep run their chunks in the same kind of pool
 (:func:`prs_geom.runtime.scaleout.run_chunks`).
 
 Processes, not threads: FCL, manifold3d and matplotlib hold the GIL. A build's workers are
-processes of its own (:class:`~prs_geom.runtime.sidecar.SidecarPool`, ``processes``):
-two interpreters and no resource tracker, started with the build and killed at its end. The
+processes of its own (:func:`~prs_geom.runtime.sidecar.shared_pool`, ``processes``):
+two interpreters and no resource tracker, kept for the next build and killed when one fails. The
 studies' pool is joblib's *loky* executor, whose warm workers the rounds of a study reuse
 (and a build that runs a tolerance study uses it too, so that the study shares the build's
 workers). Both kinds are fresh interpreters (never forked: manifold3d and BLAS start
@@ -52,6 +52,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from prs_geom.model.io import write_file_atomic
+from prs_geom.runtime.memwatch import release_free_heap
 
 __all__ = ["WORKERS_ENV", "default_workers", "Job", "Background", "FileProgress", "PoolClosed", "worker_init",
            "signals_ignored"]
@@ -180,8 +181,6 @@ class FileProgress:
 
 
 def _timed(fn: Callable[..., Any], args: tuple, kwargs: dict) -> tuple[Any, float]:
-    from prs_geom.runtime.memwatch import release_free_heap
-
     t0 = time.perf_counter()
     out = fn(*args, **kwargs)
     release_free_heap()     # the job's temporaries, before the worker's next job
@@ -256,9 +255,9 @@ class Background:
         self.workers = default_workers() if workers is None else workers
         #: the build's plot process (:class:`prs_geom.runtime.sidecar.Sidecar`), or None
         self.sidecar = sidecar
-        #: makes a pool of its own from the worker count (the build's:
-        #: :class:`prs_geom.runtime.sidecar.SidecarPool`; started by :meth:`start` or the
-        #: first job, closed on leaving), or None: loky's shared pool
+        #: gives a pool of its own for the worker count (the build's:
+        #: :func:`prs_geom.runtime.sidecar.shared_pool`; taken at the first job, closed on
+        #: leaving unless reusable), or None: loky's shared pool
         self.processes = processes
         self._pool: Any = None
         self._progress_dir: str | None = None
@@ -315,9 +314,8 @@ class Background:
         return Job(future, progress_file=progress_file)
 
     def start(self) -> None:
-        """Start a pool of its own (:attr:`processes`) now, so that its processes import
-        their warm-up while the caller works on; nothing when there is none, no worker, or
-        it runs."""
+        """Take a pool of its own (:attr:`processes`) now; nothing when there is none, no
+        worker, or the one it has is usable."""
         if self.processes is not None and self.workers > 0 and (self._pool is None or not self._pool.usable):
             self._pool = self.processes(self.workers)
 

@@ -43,6 +43,7 @@ they are drawn (``tests/test_build_cache.py``); the pool for every job of a cold
 """
 from __future__ import annotations
 
+import atexit
 import os
 import pickle
 import select
@@ -224,14 +225,12 @@ class SidecarPool:
     ----------
     workers : int
         Number of processes (at least 1).
-    warm : callable or None
-        Run by each process before it takes jobs (:class:`Sidecar`).
     idle_s : float or None
         The pool closes itself after this many seconds without a job (the processes of
         :func:`shared_pool`, which later builds reuse); None: only :meth:`close` closes it.
     """
 
-    def __init__(self, workers: int, warm: Callable[[], None] | None = None, idle_s: float | None = None) -> None:
+    def __init__(self, workers: int, idle_s: float | None = None) -> None:
         if workers < 1:
             raise ValueError(f"workers = {workers}: a pool needs at least one process")
         self.changed = threading.Condition()
@@ -244,7 +243,7 @@ class SidecarPool:
         #: whether the pool outlives the caller's use of it (:func:`shared_pool`)
         self.reusable = idle_s is not None
         self._wake_r, self._wake_w = os.pipe()
-        self.processes = [Sidecar(warm) for _ in range(workers)]
+        self.processes = [Sidecar() for _ in range(workers)]
         self.workers = workers
         self._thread = threading.Thread(target=self._serve, name="prs-geom-pool", daemon=True)
         self._thread.start()
@@ -280,15 +279,14 @@ class SidecarPool:
         """``sidecar`` ended: its job, every queued job and every later one fail; the other
         processes finish theirs (holding :attr:`changed`)."""
         self._failure = failure
-        self.processes.remove(sidecar)
         self._finish(self._running.pop(sidecar), (False, failure))
         while self._queue:
             self._finish(self._queue.popleft(), (False, failure))
 
     def _serve(self) -> None:
         """The pool's thread: sends each queued job to the first idle process (outside the
-        lock: a process still importing its warm-up reads its job only then, and the caller
-        must not wait for that) and finishes each job when its reply arrives."""
+        lock: a process still starting reads its job only then, and the caller must not wait
+        for that) and finishes each job when its reply arrives."""
         while True:
             sends = []
             with self.changed:
@@ -367,7 +365,7 @@ _shared: SidecarPool | None = None
 _shared_lock = threading.Lock()
 
 
-def shared_pool(workers: int, warm: Callable[[], None] | None = None) -> SidecarPool:
+def shared_pool(workers: int) -> SidecarPool:
     """The process's pool of ``workers`` build workers, reused from build to build as loky
     reuses its workers: a script, a notebook or a test session that builds again finds them
     with their imports done. A new pool when there is none, it has another size, it lost a
@@ -379,25 +377,14 @@ def shared_pool(workers: int, warm: Callable[[], None] | None = None) -> Sidecar
             _shared.close()
             _shared = None
         if _shared is None:
-            if not _exit_hooked:
-                _hook_exit()
-            _shared = SidecarPool(workers, warm, SHARED_IDLE_S)
+            _shared = SidecarPool(workers, SHARED_IDLE_S)
         return _shared
 
 
-_exit_hooked = False
-
-
-def _hook_exit() -> None:
-    global _exit_hooked
-    import atexit
-
-    def close_shared() -> None:
-        if _shared is not None:
-            _shared.close()
-
-    atexit.register(close_shared)
-    _exit_hooked = True
+@atexit.register
+def _close_shared() -> None:
+    if _shared is not None:
+        _shared.close()
 
 
 # --------------------------------------------------------------------------- in the process
