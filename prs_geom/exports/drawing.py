@@ -38,13 +38,12 @@ Files are byte for byte deterministic for a given date string (written by
 comes from the design hash. The PDF is the same bytes from run to run. Text from the design
 file (the design name, material names) is escaped for TEXT entities
 (:func:`prs_geom.exports.textsafe.dxf_text`); the PDF draws the texts' glyph outlines
-(ezdxf's font engine), so no matplotlib mathtext is parsed.
+(ezdxf's font engine; :mod:`prs_geom.exports.sheet_pdf` writes the pages), so no text is
+parsed as markup on the way.
 """
 from __future__ import annotations
 
-import functools
 import hashlib
-import io
 import math
 import random
 from pathlib import Path
@@ -472,67 +471,34 @@ def _align(name: str):
 
 # --------------------------------------------------------------------------- PDF
 def render_pdf(docs: list, path: Path) -> None:
-    """One A3 page per document: its paper-space layout, via ezdxf's drawing add-on and
-    matplotlib (black lines on white)."""
+    """One A3 page per document: its paper-space layout drawn by ezdxf's drawing add-on
+    into PDF operators (:mod:`prs_geom.exports.sheet_pdf`), black lines on white, each
+    line at its layer's ISO 128 width."""
     # ezdxf jiggles hatch lines by a random offset (ezdxf.render.hatching); a fixed seed,
     # restored afterwards, makes the PDF the same bytes from run to run
     state = random.getstate()
     random.seed(0)
     try:
-        _render_pages(docs, path)
+        data = _render_pages(docs)
     finally:
         random.setstate(state)
+    Path(path).write_bytes(data)
 
 
-@functools.cache
-def _sheet_axes_class() -> type:
-    """An Axes class whose ``add_patch`` leaves the data limits alone, for the drawing sheets.
-
-    ezdxf's matplotlib backend adds every path it draws (hatch lines, outlines, and one patch
-    per line of text, holding the Bezier outlines of all its glyphs) with ``Axes.add_patch``,
-    which walks the Bezier extrema of each path to grow the data limits: most of the PDF's
-    cost (3.5 of 6 s under the profiler). A sheet's view is set explicitly after
-    drawing (the sheet rectangle, ``adjustable="box"``, :func:`_render_pages`; that also
-    overrides the autoscaling the backend's ``finalize`` asks for), so the data limits are
-    never read; ``add_artist`` attaches the patch exactly as ``add_patch`` does
-    (axes, transform, clip path, position in the drawing order), so the PDF bytes are the
-    same. Built on first use: importing this module does not import matplotlib.
-    """
-    from matplotlib.axes import Axes
-    from matplotlib.patches import Patch
-
-    class SheetAxes(Axes):
-        def add_patch(self, p: Patch) -> Patch:
-            """Add ``p`` as ``Axes.add_patch`` would, without updating the data limits."""
-            return self.add_artist(p)
-
-    return SheetAxes
-
-
-def _render_pages(docs: list, path: Path) -> None:
+def _render_pages(docs: list) -> bytes:
     from ezdxf.addons.drawing import Frontend, RenderContext
     from ezdxf.addons.drawing.config import BackgroundPolicy, ColorPolicy, Configuration
-    from ezdxf.addons.drawing.matplotlib import MatplotlibBackend
-    from matplotlib.backends.backend_pdf import PdfPages
-    from matplotlib.figure import Figure
+
+    from prs_geom.exports.sheet_pdf import PdfSheetBackend, pdf_document
 
     cfg = Configuration(background_policy=BackgroundPolicy.WHITE, color_policy=ColorPolicy.BLACK)
-    # rendered in memory, written in one go: matplotlib writing straight to a file that hits a
-    # full disk reports a zlib stream error instead of the OSError (ENOSPC) that names the cause
-    buffer = io.BytesIO()
-    with PdfPages(buffer, metadata={"CreationDate": None, "Creator": "prs_geom"}) as pdf:
-        for doc in docs:
-            psp = doc.paperspace()
-            fig = Figure(figsize=(SHEET[0] / 25.4, SHEET[1] / 25.4))
-            ax = fig.add_axes((0.0, 0.0, 1.0, 1.0), axes_class=_sheet_axes_class())
-            backend = MatplotlibBackend(ax, adjust_figure=False)
-            Frontend(RenderContext(doc), backend, config=cfg).draw_layout(psp, finalize=True)
-            # the view is the sheet, whatever was drawn: the data limits play no part
-            ax.set_aspect("equal", adjustable="box")
-            ax.set_xlim(0.0, SHEET[0])
-            ax.set_ylim(0.0, SHEET[1])
-            pdf.savefig(fig)
-    Path(path).write_bytes(buffer.getvalue())
+    pages = []
+    for doc in docs:
+        # the page is the sheet, whatever is drawn: paper space 1:1, origin bottom left
+        backend = PdfSheetBackend(SHEET)
+        Frontend(RenderContext(doc), backend, config=cfg).draw_layout(doc.paperspace(), finalize=True)
+        pages.append((SHEET, backend.content()))
+    return pdf_document(pages)
 
 
 def write_drawings(design: PRSDesign, contact, out_dir: Path | str, date: str,

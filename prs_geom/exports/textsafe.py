@@ -78,10 +78,11 @@ DXF (:func:`dxf_text`, :func:`dxf_wrap`)
 PDF
     ``drawings.pdf`` is drawn from the DXF documents by ezdxf's drawing add-on: the plain text
     of each TEXT entity (as above) is turned into glyph outlines by ezdxf's own font engine
-    and handed to matplotlib as filled paths, so matplotlib's mathtext never sees the text
-    and a ``$...$`` in it is drawn as typed. Where user text goes into a matplotlib text
-    itself (plot titles), :func:`mpl_text` escapes ``$`` (matplotlib draws ``\\$`` as ``$``
-    and parses no mathtext in a string without an unescaped ``$``).
+    and written as filled PDF paths (:mod:`prs_geom.exports.sheet_pdf`): the PDF holds no
+    text strings, so nothing in it is parsed and a ``$...$`` is drawn as typed. Where user
+    text goes into a matplotlib text (plot titles), :func:`mpl_text` escapes ``$``
+    (matplotlib draws ``\\$`` as ``$`` and parses no mathtext in a string without an
+    unescaped ``$``).
 
 HTML
     report.html escapes every text with :func:`html.escape` (:mod:`prs_geom.exports.html`).
