@@ -990,7 +990,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     succeed or fail.
     """
     from prs_geom.runtime.memwatch import release_free_heap
-    from prs_geom.runtime.pool import Background
+    from prs_geom.runtime.pool import Background, main_threads
     from prs_geom.runtime.sidecar import shared_pool
 
     stages = STAGES if stages is None else stages
@@ -1001,7 +1001,9 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     # processes of the build's own (no resource trackers, no joblib), unless a tolerance study
     # runs in the build: it shares loky's pool with the build's jobs (stage_tolerance)
     own = not (ctx.computes("tolerance") and getattr(design, "tolerances", None) is not None)
-    with Background(workers, sidecar=sidecar, processes=shared_pool if own else None) as background:
+    # BLAS shares the cores with the workers (pool.inner_threads)
+    with Background(workers, sidecar=sidecar, processes=shared_pool if own else None) as background, \
+            main_threads(background.workers):
         ctx.background = background
         added = {}
         for name, fn in stages:

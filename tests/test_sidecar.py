@@ -200,3 +200,48 @@ def test_an_idle_pool_closes_itself_and_the_next_job_gets_a_new_one():
         assert not pool.usable and pool.processes[0]._proc.returncode is not None
         assert bg.submit(os.getpid).result() != first
         bg._pool.close()
+
+
+def _blas_threads(info: list[dict]) -> set[int]:
+    return {lib["num_threads"] for lib in info if lib["user_api"] == "blas"}
+
+
+def test_the_pool_and_the_main_process_share_the_cores_with_blas(monkeypatch):
+    """The build's processes share the cores: each worker's BLAS runs pool.inner_threads
+    threads (the CPUs over the main process and the workers: 1 for two workers on two cores), and
+    the main process's BLAS as many while a build has workers; none of it when the user
+    set the thread counts (their setting wins), nor in the main process without workers."""
+    from threadpoolctl import threadpool_info
+
+    from prs_geom.runtime.pool import THREAD_ENV, inner_threads, main_threads
+    from prs_geom.runtime.scaleout import available_cpus
+
+    for name in THREAD_ENV:
+        monkeypatch.delenv(name, raising=False)
+    expected = max(1, available_cpus() // 3)
+    assert inner_threads(2) == expected and inner_threads(0) == available_cpus()
+    before = _blas_threads(threadpool_info())
+    assert before, "numpy's BLAS is loaded in this process"
+    pool = SidecarPool(1)
+    try:
+        pool.submit(np.zeros, (3,), {}).result()         # numpy (and its BLAS) loaded there
+        assert _blas_threads(pool.submit(threadpool_info, (), {}).result()[0]) == {inner_threads(1)}
+    finally:
+        pool.close()
+    with main_threads(2):
+        assert _blas_threads(threadpool_info()) == {expected}
+    assert _blas_threads(threadpool_info()) == before
+    with main_threads(0):
+        assert _blas_threads(threadpool_info()) == before
+
+    # a count the pool would not choose (OpenBLAS takes at most one thread per core)
+    user = 1 if inner_threads(1) > 1 else min(2, available_cpus())
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", str(user))
+    pool = SidecarPool(1)
+    try:
+        pool.submit(np.zeros, (3,), {}).result()
+        assert _blas_threads(pool.submit(threadpool_info, (), {}).result()[0]) == {user}
+    finally:
+        pool.close()
+    with main_threads(2):
+        assert _blas_threads(threadpool_info()) == before

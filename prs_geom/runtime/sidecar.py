@@ -117,17 +117,21 @@ class Sidecar:
         A module-level function the process calls with no arguments before it takes jobs
         (it is named to the process, not pickled): the build's is
         :func:`prs_geom.exports.plots.warm_up`, matplotlib imported and its fonts loaded.
+    threads : int or None
+        BLAS and OpenMP threads of the process (:func:`~prs_geom.runtime.pool.thread_env`);
+        None: the libraries' defaults.
     """
 
-    def __init__(self, warm: Callable[[], None] | None = None) -> None:
-        from prs_geom.runtime.pool import _blocked
+    def __init__(self, warm: Callable[[], None] | None = None, threads: int | None = None) -> None:
+        from prs_geom.runtime.pool import _blocked, thread_env
 
         argv = [sys.executable, "-m", "prs_geom.runtime.sidecar", str(os.getpid())]
         if warm is not None:
             argv.append(f"{warm.__module__}:{warm.__qualname__}")
         with _blocked():    # the child starts with SIGINT and SIGTERM blocked (pool._blocked)
             # unbuffered: what select() sees on the pipe is all there is (finished())
-            self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0)
+            self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
+                                          env=None if threads is None else thread_env(threads))
         self._sent = 0
         self._received: list[tuple[bool, Any]] = []
 
@@ -243,7 +247,11 @@ class SidecarPool:
         #: whether the pool outlives the caller's use of it (:func:`shared_pool`)
         self.reusable = idle_s is not None
         self._wake_r, self._wake_w = os.pipe()
-        self.processes = [Sidecar() for _ in range(workers)]
+        from prs_geom.runtime.pool import inner_threads
+
+        # the processes and the caller share the cores (pool.inner_threads)
+        threads = inner_threads(workers)
+        self.processes = [Sidecar(threads=threads) for _ in range(workers)]
         self.workers = workers
         self._thread = threading.Thread(target=self._serve, name="prs-geom-pool", daemon=True)
         self._thread.start()
