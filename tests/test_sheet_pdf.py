@@ -20,15 +20,15 @@ from ezdxf.path import Path as EzPath
 from prs_geom.exports.sheet import SHEET
 from prs_geom.exports.sheet_pdf import MIN_LINE_WIDTH_MM, PdfSheetBackend, path_operators, pdf_document
 
-_TOKEN = re.compile(r"(-?\d+) (-?\d+)|([mlc])")
+_TOKEN = re.compile(r"(-?\d+) (-?\d+)|([mlch])\b")
 
 
 def _segments(ops: str) -> list[tuple[str, np.ndarray]]:
-    """(operator, its points in mm) in order, read from ``m``/``l``/``c`` operators."""
+    """(operator, its points in mm) in order, read from ``m``/``l``/``c``/``h`` operators."""
     out, pts = [], []
     for x, y, op in _TOKEN.findall(ops):
         if op:
-            out.append((op, np.array(pts, dtype=float) / 1000.0))
+            out.append((op, np.array(pts, dtype=float).reshape(-1, 2) / 1000.0))
             pts = []
         else:
             pts.append((int(x), int(y)))
@@ -133,3 +133,34 @@ def test_drawing_sheet_draws_each_layer_at_its_iso_width():
     layer_widths = {10 * lw for _, _, lw in LAYERS.values()}
     assert layer_widths <= widths, (layer_widths, widths)
     assert widths <= layer_widths | {250, 350, 500, 700}, widths   # ezdxf's default 0.25 mm, ISO series
+
+
+def test_a_path_that_ends_where_it_starts_is_closed():
+    """A closed outline gets h (a join at its first corner, not two butt ends, as a 0.5 mm
+    outline showed at 1200 dpi); an open one and a fill's open subpath do not."""
+    square = EzPath(Vec2(0.0, 0.0))
+    for xy in ((10.0, 0.0), (10.0, 10.0), (0.0, 10.0), (0.0, 0.0)):
+        square.line_to(Vec2(*xy))
+    hook = EzPath(Vec2(20.0, 0.0))
+    hook.line_to(Vec2(30.0, 0.0))
+    hook.line_to(Vec2(30.0, 5.0))
+    ops = [op for op, _ in _segments(path_operators([NumpyPath2d(square), NumpyPath2d(hook)]))]
+    assert ops == ["m", "l", "l", "l", "l", "h", "m", "l", "l"]
+
+
+def test_coordinates_beyond_a_pdf_integer_or_not_finite_are_refused():
+    be = PdfSheetBackend(SHEET)
+    props = BackendProperties()
+    for bad in (float("nan"), float("inf"), 3.0e9):
+        with pytest.raises(ValueError, match="not finite or beyond the PDF integer range"):
+            be.draw_line(Vec2(0.0, 0.0), Vec2(bad, 1.0), props)
+
+
+def test_a_segment_below_the_resolution_is_dropped_and_a_zero_one_is_a_dot():
+    be = PdfSheetBackend(SHEET)
+    be.draw_solid_lines([(Vec2(1.0, 1.0), Vec2(1.0004, 1.0)), (Vec2(2.0, 2.0), Vec2(2.0, 2.0)),
+                         (Vec2(3.0, 3.0), Vec2(4.0, 3.0))], BackendProperties())
+    text = be.content().decode()
+    assert "1000 1000" not in text                          # 0.4 um long: not drawn
+    assert "1 J\n2000 2000 m 2000 2000 l\nS 0 J" in text    # zero length: a dot
+    assert "3000 3000 m 4000 3000 l\nS" in text

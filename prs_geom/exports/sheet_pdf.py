@@ -16,7 +16,9 @@ Conventions
   block, 0.25 mm dimensions and centre lines, 0.18 mm hatching and thread roots) at true
   size, at least :data:`MIN_LINE_WIDTH_MM`; butt caps, so that a dash is as long as the line
   type says (round caps would close the gaps of a centre line drawn at 0.25 mm), round joins
-  within a path; a dot of a line type (a zero-length dash) is a round dot of the line width.
+  within a path, and a path that ends where it starts is closed (``h``), so that its first
+  corner is a join too; a dot of a line type (a zero-length dash) is a round dot of the line
+  width; a segment shorter than 1 um is not drawn.
 * Fills: even-odd (``f*``), the rule ezdxf's front end draws holes by (a glyph's counters).
 * The bytes depend only on the drawings: no date, no producer version, streams compressed
   with zlib at a fixed level.
@@ -46,9 +48,18 @@ _LINE_TO, _CURVE3_TO, _CURVE4_TO, _MOVE_TO = 1, 2, 3, 4
 _VERTICES = np.array([0, 1, 2, 3, 1])
 
 
+#: Largest coordinate magnitude (um): a PDF integer is at most 2^31 - 1 (ISO 32000-1, Annex C).
+_MAX_UM = 2 ** 31 - 1
+
+
 def _um(xy: NDArray[np.float64]) -> NDArray[np.int64]:
-    """Paper mm -> integer micrometres, to the nearest."""
-    return np.rint(np.asarray(xy, dtype=np.float64) * 1000.0).astype(np.int64)
+    """Paper mm -> integer micrometres, to the nearest; ValueError for a coordinate that is
+    not finite or not a PDF integer (|x| > 2147 m: a drawing gone wrong, never a sheet)."""
+    um = np.rint(np.asarray(xy, dtype=np.float64) * 1000.0)
+    if not np.all(np.abs(um) <= _MAX_UM):          # NaN fails this too
+        bad = np.asarray(xy, dtype=np.float64).ravel()[~(np.abs(um.ravel()) <= _MAX_UM)][0]
+        raise ValueError(f"drawing coordinate {bad!r} mm: not finite or beyond the PDF integer range")
+    return um.astype(np.int64)
 
 
 def path_operators(paths: Iterable[BkPath2d]) -> str:
@@ -86,10 +97,18 @@ def path_operators(paths: Iterable[BkPath2d]) -> str:
         out[out_first[quad]] = p0 + 2.0 / 3.0 * (c - p0)
         out[out_first[quad] + 1] = p1 + 2.0 / 3.0 * (c - p1)
         out[out_first[quad] + 2] = p1
+    um = _um(out)
     # a space after a coordinate pair, the operator and a line break after a command's last
+    last = out_first + out_counts - 1
     suffix = np.full(len(out), " ", dtype=object)
-    suffix[out_first + out_counts - 1] = np.array(["", " l\n", " c\n", " c\n", " m\n"], dtype=object)[codes]
-    return "".join(f"{x} {y}{s}" for (x, y), s in zip(_um(out).tolist(), suffix.tolist()))
+    suffix[last] = np.array(["", " l\n", " c\n", " c\n", " m\n"], dtype=object)[codes]
+    # a subpath that ends where it starts is closed with h: its first corner is then a join
+    # like the others, not two butt ends
+    starts = np.flatnonzero(codes == _MOVE_TO)
+    ends = np.append(starts[1:] - 1, len(codes) - 1)
+    closed = (ends > starts) & np.all(um[out_first[starts]] == um[last[ends]], axis=1)
+    suffix[last[ends[closed]]] += "h\n"
+    return "".join(f"{x} {y}{s}" for (x, y), s in zip(um.tolist(), suffix.tolist()))
 
 
 def _ramp(counts: NDArray) -> NDArray:
@@ -155,9 +174,12 @@ class PdfSheetBackend(Backend):
             return
         self._stroking(properties)
         um = _um(ends)
-        dots = (um[:, 0] == um[:, 2]) & (um[:, 1] == um[:, 3])
-        if (~dots).any():
-            self._ops.append("".join(f"{a} {b} m {c} {d} l\n" for a, b, c, d in um[~dots].tolist()) + "S\n")
+        # a dot is a zero-length segment as ezdxf's back ends tell it (Vec2.isclose); a
+        # segment shorter than the 1 um resolution is not drawn
+        dots = np.hypot(ends[:, 2] - ends[:, 0], ends[:, 3] - ends[:, 1]) <= 1e-12
+        lines = ~dots & ((um[:, 0] != um[:, 2]) | (um[:, 1] != um[:, 3]))
+        if lines.any():
+            self._ops.append("".join(f"{a} {b} m {c} {d} l\n" for a, b, c, d in um[lines].tolist()) + "S\n")
         if dots.any():
             # the dots of a line type: round caps make a zero-length segment a dot
             self._ops.append("1 J\n" + "".join(f"{a} {b} m {a} {b} l\n" for a, b, _, _ in um[dots].tolist())

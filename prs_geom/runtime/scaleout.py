@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import logging
 import numbers
+import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Sequence, TypeVar
 
 from prs_geom.model.errors import DesignError, EnvironmentFailure
-from prs_geom.runtime.pool import available_cpus   # the default number of joblib and local Dask workers
 from prs_geom.runtime.progress import ProgressFn
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -110,6 +110,15 @@ def _whole(name: str, value: Any, least: int) -> int:
 
 
 # --------------------------------------------------------------------------- backends
+def available_cpus() -> int:
+    """CPUs this process may run on (its affinity mask where the OS has one, else
+    ``os.cpu_count()``): the default number of joblib and local Dask workers."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
 @dataclass(frozen=True)
 class Backend:
     """Where :func:`run_chunks` runs the chunks.
