@@ -990,7 +990,7 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     succeed or fail.
     """
     from prs_geom.runtime.memwatch import release_free_heap
-    from prs_geom.runtime.pool import Background, main_threads
+    from prs_geom.runtime.pool import Background, build_threads
     from prs_geom.runtime.sidecar import shared_pool
 
     stages = STAGES if stages is None else stages
@@ -1001,9 +1001,8 @@ def run_stages(design, out: Path, progress: ProgressFn = silent,
     # processes of the build's own (no resource trackers, no joblib), unless a tolerance study
     # runs in the build: it shares loky's pool with the build's jobs (stage_tolerance)
     own = not (ctx.computes("tolerance") and getattr(design, "tolerances", None) is not None)
-    # BLAS shares the cores with the workers (pool.inner_threads)
-    with Background(workers, sidecar=sidecar, processes=shared_pool if own else None) as background, \
-            main_threads(background.workers):
+    # BLAS on one thread, as in the workers: the same numbers on any machine (runtime.pool)
+    with build_threads(), Background(workers, sidecar=sidecar, processes=shared_pool if own else None) as background:
         ctx.background = background
         added = {}
         for name, fn in stages:

@@ -206,42 +206,37 @@ def _blas_threads(info: list[dict]) -> set[int]:
     return {lib["num_threads"] for lib in info if lib["user_api"] == "blas"}
 
 
-def test_the_pool_and_the_main_process_share_the_cores_with_blas(monkeypatch):
-    """The build's processes share the cores: each worker's BLAS runs pool.inner_threads
-    threads (the CPUs over the main process and the workers: 1 for two workers on two cores), and
-    the main process's BLAS as many while a build has workers; none of it when the user
-    set the thread counts (their setting wins), nor in the main process without workers."""
+def test_every_process_of_a_build_runs_blas_on_one_thread(monkeypatch):
+    """pool.BUILD_THREADS: a pool worker's BLAS runs one thread (threadpoolctl read in the
+    worker), and so does this process's inside build_threads and not after, whatever the
+    core count; the user's setting wins in both, and a shared pool started before the user
+    changed it is replaced, not reused."""
     from threadpoolctl import threadpool_info
 
-    from prs_geom.runtime.pool import THREAD_ENV, inner_threads, main_threads
-    from prs_geom.runtime.scaleout import available_cpus
+    from prs_geom.runtime.pool import BUILD_THREADS, THREAD_ENV, build_threads
 
     for name in THREAD_ENV:
         monkeypatch.delenv(name, raising=False)
-    expected = max(1, available_cpus() // 3)
-    assert inner_threads(2) == expected and inner_threads(0) == available_cpus()
+    assert BUILD_THREADS == 1
     before = _blas_threads(threadpool_info())
     assert before, "numpy's BLAS is loaded in this process"
-    pool = SidecarPool(1)
+    pool = shared_pool(1)
     try:
         pool.submit(np.zeros, (3,), {}).result()         # numpy (and its BLAS) loaded there
-        assert _blas_threads(pool.submit(threadpool_info, (), {}).result()[0]) == {inner_threads(1)}
-    finally:
-        pool.close()
-    with main_threads(2):
-        assert _blas_threads(threadpool_info()) == {expected}
-    assert _blas_threads(threadpool_info()) == before
-    with main_threads(0):
+        assert _blas_threads(pool.submit(threadpool_info, (), {}).result()[0]) == {1}
+        with build_threads():
+            assert _blas_threads(threadpool_info()) == {1}
         assert _blas_threads(threadpool_info()) == before
 
-    # a count the pool would not choose (OpenBLAS takes at most one thread per core)
-    user = 1 if inner_threads(1) > 1 else min(2, available_cpus())
-    monkeypatch.setenv("OPENBLAS_NUM_THREADS", str(user))
-    pool = SidecarPool(1)
-    try:
-        pool.submit(np.zeros, (3,), {}).result()
-        assert _blas_threads(pool.submit(threadpool_info, (), {}).result()[0]) == {user}
+        # a count the build would not choose (OpenBLAS takes at most one thread per core)
+        user = min(2, os.cpu_count() or 1)
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", str(user))
+        again = shared_pool(1)
+        assert again is not pool and not pool.usable
+        again.submit(np.zeros, (3,), {}).result()
+        assert _blas_threads(again.submit(threadpool_info, (), {}).result()[0]) == {user}
+        with build_threads():
+            assert _blas_threads(threadpool_info()) == before
     finally:
+        shared_pool(1).close()
         pool.close()
-    with main_threads(2):
-        assert _blas_threads(threadpool_info()) == before

@@ -40,11 +40,17 @@ manager process of its own, which could be orphaned too.
 ``PRS_GEOM_WORKERS`` sets the number of worker processes of a build (``0``: everything in
 the main process, in order); the default is 2 on a machine with at least two cores, else 0.
 
-The build's processes share the cores: each gives BLAS and OpenMP :func:`inner_threads`
-threads (one each for the main process and two workers on two cores), unless the user set
-their thread counts (:data:`THREAD_ENV`). OpenBLAS's own threads, one per core in every
-process by default, spin between calls on cores the other processes need: 0.8 s of the
-default build's 13 s of CPU and 0.4 s of its wall time (six alternating runs on two cores).
+Every process of a build (the main process, the workers, a rebuild's plot process) runs
+BLAS and OpenMP on :data:`BUILD_THREADS` thread, unless the user set their thread counts
+(:data:`THREAD_ENV`), so that
+
+* the numbers do not depend on the machine: OpenBLAS's results depend on its thread count
+  (a 300 x 300 matrix product and a dot product of 10^6 terms differ in the last bits
+  between 1 and 2 threads, measured), and a build on 2 cores or on 64, serial or with
+  workers, gives the same bytes;
+* the processes do not oversubscribe the cores: OpenBLAS starts a thread per core in every
+  process, which spin between calls on cores the other processes need (0.8 s of the
+  default build's 13 s of CPU and 0.4 s of its wall time, six alternating runs on two cores).
 """
 from __future__ import annotations
 
@@ -60,7 +66,7 @@ from typing import Any, Callable
 from prs_geom.model.io import write_file_atomic
 from prs_geom.runtime.memwatch import release_free_heap
 
-__all__ = ["WORKERS_ENV", "THREAD_ENV", "available_cpus", "default_workers", "inner_threads", "thread_env", "main_threads", "Job", "Background", "FileProgress", "PoolClosed", "worker_init",
+__all__ = ["WORKERS_ENV", "THREAD_ENV", "BUILD_THREADS", "default_workers", "user_threads", "thread_overrides", "thread_env", "build_threads", "Job", "Background", "FileProgress", "PoolClosed", "worker_init",
            "signals_ignored"]
 
 #: Environment variable: number of worker processes of a build (0 = serial).
@@ -68,6 +74,8 @@ WORKERS_ENV = "PRS_GEOM_WORKERS"
 #: Environment variables that set the threads of BLAS and OpenMP in a process, read when the
 #: library loads (before numpy's import in a worker).
 THREAD_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+#: BLAS and OpenMP threads in every process of a build (module doc).
+BUILD_THREADS = 1
 #: Seconds between two looks of a worker at its parent process.
 PARENT_WATCH_S = 0.5
 #: Seconds an idle worker of the pool waits for more work before it exits.
@@ -92,45 +100,34 @@ def default_workers() -> int:
     return 2 if (os.cpu_count() or 1) >= 2 else 0
 
 
-def available_cpus() -> int:
-    """CPUs this process may run on (its affinity mask where the OS has one, else
-    ``os.cpu_count()``)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):  # not Linux
-        return max(1, os.cpu_count() or 1)
+def user_threads() -> tuple[str, ...]:
+    """The user's settings of :data:`THREAD_ENV` ('' where unset): a build leaves the
+    thread counts alone when any is set."""
+    return tuple(os.environ.get(name, "").strip() for name in THREAD_ENV)
 
 
-def inner_threads(workers: int) -> int:
-    """BLAS and OpenMP threads for each process of a build with ``workers`` worker processes:
-    the CPUs this process may use shared by the main process and the workers, at least 1."""
-    return max(1, available_cpus() // (max(workers, 0) + 1))
+def thread_overrides() -> dict[str, str]:
+    """The variables a new worker process gets on top of this one's environment: BLAS and
+    OpenMP on :data:`BUILD_THREADS` thread, none when the user set their thread counts."""
+    return {} if any(user_threads()) else {name: str(BUILD_THREADS) for name in THREAD_ENV}
 
 
-def _user_threads() -> bool:
-    return any(os.environ.get(name, "").strip() for name in THREAD_ENV)
+def thread_env() -> dict[str, str]:
+    """The environment of a new worker process: this one's with :func:`thread_overrides`."""
+    return {**os.environ, **thread_overrides()}
 
 
-def thread_env(threads: int) -> dict[str, str]:
-    """The environment of a new worker process: this one's, with BLAS and OpenMP limited to
-    ``threads`` threads unless the user set their thread counts (:data:`THREAD_ENV`)."""
-    env = dict(os.environ)
-    if not _user_threads():
-        env.update({name: str(threads) for name in THREAD_ENV})
-    return env
-
-
-def main_threads(workers: int) -> Any:
-    """A context in which this process's BLAS and OpenMP use :func:`inner_threads` threads
-    (threadpoolctl; they are loaded already, so an environment variable would come too
-    late); no limit without workers or when the user set the thread counts."""
+def build_threads() -> Any:
+    """A context in which this process's BLAS and OpenMP run :data:`BUILD_THREADS` thread
+    (threadpoolctl: they are loaded already, so an environment variable would come too
+    late); no limit when the user set the thread counts."""
     import contextlib
 
-    if workers <= 0 or _user_threads():
+    if any(user_threads()):
         return contextlib.nullcontext()
     from threadpoolctl import threadpool_limits
 
-    return threadpool_limits(limits=inner_threads(workers))
+    return threadpool_limits(limits=BUILD_THREADS)
 
 
 # --------------------------------------------------------------------------- in the worker
@@ -197,11 +194,12 @@ def make_executor(workers: int) -> Any:
 
     loky's *reusable* executor: the build and the studies that follow it (or a tolerance
     synthesis that runs many Monte Carlo rounds) share warm workers instead of starting
-    new interpreters each time; idle workers leave after :data:`IDLE_S` seconds."""
+    new interpreters each time; idle workers leave after :data:`IDLE_S` seconds. The
+    workers start with BLAS and OpenMP on one thread (:func:`thread_overrides`)."""
     from joblib.externals.loky import get_reusable_executor
 
     return get_reusable_executor(max_workers=workers, timeout=IDLE_S, initializer=worker_init,
-                                 initargs=(os.getpid(),))
+                                 initargs=(os.getpid(),), env=thread_overrides())
 
 
 class FileProgress:

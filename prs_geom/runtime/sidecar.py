@@ -117,12 +117,12 @@ class Sidecar:
         A module-level function the process calls with no arguments before it takes jobs
         (it is named to the process, not pickled): the build's is
         :func:`prs_geom.exports.plots.warm_up`, matplotlib imported and its fonts loaded.
-    threads : int or None
-        BLAS and OpenMP threads of the process (:func:`~prs_geom.runtime.pool.thread_env`);
-        None: the libraries' defaults.
+    pinned : bool
+        BLAS and OpenMP on one thread, as in every process of a build
+        (:func:`~prs_geom.runtime.pool.thread_env`); False: the libraries' defaults.
     """
 
-    def __init__(self, warm: Callable[[], None] | None = None, threads: int | None = None) -> None:
+    def __init__(self, warm: Callable[[], None] | None = None, pinned: bool = True) -> None:
         from prs_geom.runtime.pool import _blocked, thread_env
 
         argv = [sys.executable, "-m", "prs_geom.runtime.sidecar", str(os.getpid())]
@@ -131,7 +131,7 @@ class Sidecar:
         with _blocked():    # the child starts with SIGINT and SIGTERM blocked (pool._blocked)
             # unbuffered: what select() sees on the pipe is all there is (finished())
             self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
-                                          env=None if threads is None else thread_env(threads))
+                                          env=thread_env() if pinned else None)
         self._sent = 0
         self._received: list[tuple[bool, Any]] = []
 
@@ -247,11 +247,12 @@ class SidecarPool:
         #: whether the pool outlives the caller's use of it (:func:`shared_pool`)
         self.reusable = idle_s is not None
         self._wake_r, self._wake_w = os.pipe()
-        from prs_geom.runtime.pool import inner_threads
+        from prs_geom.runtime.pool import user_threads
 
-        # the processes and the caller share the cores (pool.inner_threads)
-        threads = inner_threads(workers)
-        self.processes = [Sidecar(threads=threads) for _ in range(workers)]
+        #: the user's thread settings the processes started with (shared_pool: a change of
+        #: them between two builds starts new processes)
+        self.user_threads = user_threads()
+        self.processes = [Sidecar() for _ in range(workers)]
         self.workers = workers
         self._thread = threading.Thread(target=self._serve, name="prs-geom-pool", daemon=True)
         self._thread.start()
@@ -381,7 +382,10 @@ def shared_pool(workers: int) -> SidecarPool:
     is closed when the interpreter exits."""
     global _shared
     with _shared_lock:
-        if _shared is not None and (_shared.workers != workers or not _shared.usable):
+        from prs_geom.runtime.pool import user_threads
+
+        if _shared is not None and (_shared.workers != workers or not _shared.usable
+                                    or _shared.user_threads != user_threads()):
             _shared.close()
             _shared = None
         if _shared is None:
