@@ -16,7 +16,7 @@ from prs_geom.model.design import PRSDesign, Roller, Nut, Screw, Thread, default
 from prs_geom.model.io import load_design
 from prs_geom.model.errors import DesignError
 from prs_geom.mesh.thread import (FACE_BODY, FACE_END_HI, FACE_END_LO, FACE_MARK, FACE_THREAD, analytic_thread_volume, axial_line_crossings,
-                           manifold_status, measure_deviation, mesh_report, profile_distance)
+                           edge_flags, manifold_status, measure_deviation, mesh_report, profile_distance)
 from strategies import standard_designs
 
 EXAMPLES = __import__("pathlib").Path(__file__).parent.parent / "examples"
@@ -391,3 +391,27 @@ def test_deviation_in_chunks_equals_deviation_at_once(monkeypatch):
     monkeypatch.setattr(thread, "DEVIATION_CHUNK_FACES", 997)
     assert len(tm.faces) > 10 * 997
     assert thread.measure_deviation(tm) == whole
+
+
+def test_edge_flags_agree_with_trimesh():
+    """mesh_report's watertight and winding flags (edge_flags, one sort of edge keys) give
+    trimesh's is_watertight and is_winding_consistent, the independent reference: on the
+    default roller (closed), with a face removed (open: not watertight), with a face flipped
+    (watertight, winding not consistent), both (neither) and with a face doubled (edges of
+    three faces); a mesh without faces is neither."""
+    import trimesh
+
+    tm = build_part(default_design(), "roller")
+    V, F = np.asarray(tm.vertices), np.asarray(tm.faces)
+    flipped = F.copy()
+    flipped[10] = flipped[10, ::-1]
+    cases = {"closed": F, "open": F[1:], "flipped": flipped, "open and flipped": flipped[1:],
+             "doubled": np.vstack([F, F[:1]])}
+    seen = set()
+    for name, faces in cases.items():
+        ref = trimesh.Trimesh(V, faces, process=False, validate=False)
+        expected = (bool(ref.is_watertight), bool(ref.is_winding_consistent))
+        assert edge_flags(faces) == expected, name
+        seen.add(expected)
+    assert {(True, True), (False, True), (True, False), (False, False)} <= seen
+    assert edge_flags(F[:0]) == (False, False)
