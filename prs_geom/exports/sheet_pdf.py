@@ -63,8 +63,9 @@ def _um(xy: NDArray[np.float64]) -> NDArray[np.int64]:
 
 
 def path_operators(paths: Iterable[BkPath2d]) -> str:
-    """The PDF path construction operators (``m``, ``l``, ``c``) of ezdxf paths, in
-    micrometres on paper; each path starts a subpath at its start point.
+    """The PDF path construction operators (``m``, ``l``, ``c``, ``h``) of ezdxf paths, in
+    micrometres on paper; each path starts a subpath at its start point, and a subpath that
+    ends where it starts is closed.
 
     ezdxf stores a quadratic Bezier as (control, end) after the start point; PDF has cubic
     curves only, so a quadratic from p0 is written as the cubic of the same curve: control
@@ -88,9 +89,8 @@ def path_operators(paths: Iterable[BkPath2d]) -> str:
     out_first = np.cumsum(out_counts) - out_counts
     simple = codes != _CURVE3_TO
     # each command's vertices in order, the quadratics' replaced below
-    rows = np.repeat(first[simple], counts[simple]) + _ramp(counts[simple])
-    dest = np.repeat(out_first[simple], counts[simple]) + _ramp(counts[simple])
-    out[dest] = verts[rows]
+    ramp = _ramp(counts[simple])
+    out[np.repeat(out_first[simple], counts[simple]) + ramp] = verts[np.repeat(first[simple], counts[simple]) + ramp]
     quad = np.flatnonzero(~simple)
     if len(quad):
         p0, c, p1 = verts[first[quad] - 1], verts[first[quad]], verts[first[quad] + 1]
@@ -228,9 +228,8 @@ def pdf_document(pages: list[tuple[tuple[float, float], bytes]], creator: str = 
     """
     if not pages:
         raise ValueError("a PDF needs at least one page")
-    for text in (creator,):
-        if not text.isascii() or any(ch in text for ch in "()\\\r\n"):
-            raise ValueError(f"PDF creator {creator!r}: plain ASCII without parentheses, backslashes or line breaks")
+    if not creator.isascii() or any(ch in creator for ch in "()\\\r\n"):
+        raise ValueError(f"PDF creator {creator!r}: plain ASCII without parentheses, backslashes or line breaks")
     kids = " ".join(f"{4 + 2 * i} 0 R" for i in range(len(pages)))
     objects: list[bytes] = [
         b"<< /Type /Catalog /Pages 2 0 R >>",

@@ -109,7 +109,9 @@ class _Future:
 
 
 class Sidecar:
-    """One plot process (module docstring), started at construction.
+    """One plot process (module docstring), started at construction. It runs BLAS and
+    OpenMP on one thread, as every process of a build does
+    (:func:`~prs_geom.runtime.pool.thread_env`).
 
     Parameters
     ----------
@@ -117,12 +119,9 @@ class Sidecar:
         A module-level function the process calls with no arguments before it takes jobs
         (it is named to the process, not pickled): the build's is
         :func:`prs_geom.exports.plots.warm_up`, matplotlib imported and its fonts loaded.
-    pinned : bool
-        BLAS and OpenMP on one thread, as in every process of a build
-        (:func:`~prs_geom.runtime.pool.thread_env`); False: the libraries' defaults.
     """
 
-    def __init__(self, warm: Callable[[], None] | None = None, pinned: bool = True) -> None:
+    def __init__(self, warm: Callable[[], None] | None = None) -> None:
         from prs_geom.runtime.pool import _blocked, thread_env
 
         argv = [sys.executable, "-m", "prs_geom.runtime.sidecar", str(os.getpid())]
@@ -131,7 +130,7 @@ class Sidecar:
         with _blocked():    # the child starts with SIGINT and SIGTERM blocked (pool._blocked)
             # unbuffered: what select() sees on the pipe is all there is (finished())
             self._proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0,
-                                          env=thread_env() if pinned else None)
+                                          env=thread_env())
         self._sent = 0
         self._received: list[tuple[bool, Any]] = []
 
